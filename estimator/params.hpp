@@ -1,0 +1,100 @@
+// Parameter table and a fixed-size store of current values, bounds-checked on
+// every write. One table (estimator/params_table.inc) for the whole firmware.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+
+#include "estimator/status.hpp"
+
+namespace uwbnav {
+
+enum class ParamId : uint16_t {
+#define X(e, id, name, unit, def, lo, hi, doc) e,
+#include "estimator/params_table.inc"
+#undef X
+  kCount
+};
+
+struct ParamDef {
+  ParamId index;
+  uint16_t stable_id;  // never reused; what the NV store keys on
+  const char* name;    // dotted, lower case; what the console and files use
+  const char* unit;
+  float def;
+  float min;
+  float max;
+  const char* doc;
+};
+
+constexpr size_t kNumParams = static_cast<size_t>(ParamId::kCount);
+
+constexpr ParamDef kParamDefs[kNumParams] = {
+#define X(e, id, name, unit, def, lo, hi, doc) {ParamId::e, id, name, unit, def, lo, hi, doc},
+#include "estimator/params_table.inc"
+#undef X
+};
+
+namespace detail {
+constexpr bool params_consistent() {
+  for (size_t i = 0; i < kNumParams; ++i) {
+    const ParamDef& d = kParamDefs[i];
+    if (static_cast<size_t>(d.index) != i) return false;
+    if (!(d.min <= d.def && d.def <= d.max)) return false;
+    for (size_t j = i + 1; j < kNumParams; ++j) {
+      if (kParamDefs[j].stable_id == d.stable_id) return false;
+    }
+  }
+  return true;
+}
+}  // namespace detail
+static_assert(detail::params_consistent(), "parameter table: default outside [min,max] or duplicate stable id");
+
+// Current parameter values. Plain array of floats; writes are bounds-checked.
+class Params {
+ public:
+  Params() { reset_all(); }
+
+  float get(ParamId id) const { return values_[static_cast<size_t>(id)]; }
+  float operator[](ParamId id) const { return get(id); }
+
+  [[nodiscard]] Status set(ParamId id, float value) {
+    const size_t i = static_cast<size_t>(id);
+    if (i >= kNumParams) return Status::kNotFound;
+    if (!std::isfinite(value)) return Status::kNotFinite;
+    if (value < kParamDefs[i].min || value > kParamDefs[i].max) return Status::kOutOfRange;
+    values_[i] = value;
+    return Status::kOk;
+  }
+
+  [[nodiscard]] Status set_by_name(const char* name, float value) {
+    const ParamDef* d = find(name);
+    if (d == nullptr) return Status::kNotFound;
+    return set(d->index, value);
+  }
+
+  void reset(ParamId id) { values_[static_cast<size_t>(id)] = kParamDefs[static_cast<size_t>(id)].def; }
+  void reset_all() {
+    for (size_t i = 0; i < kNumParams; ++i) values_[i] = kParamDefs[i].def;
+  }
+
+  static const ParamDef* find(const char* name) {
+    for (size_t i = 0; i < kNumParams; ++i) {
+      if (std::strcmp(kParamDefs[i].name, name) == 0) return &kParamDefs[i];
+    }
+    return nullptr;
+  }
+  static const ParamDef* find_stable(uint16_t stable_id) {
+    for (size_t i = 0; i < kNumParams; ++i) {
+      if (kParamDefs[i].stable_id == stable_id) return &kParamDefs[i];
+    }
+    return nullptr;
+  }
+
+ private:
+  float values_[kNumParams];
+};
+
+}  // namespace uwbnav

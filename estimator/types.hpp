@@ -1,0 +1,149 @@
+// Plain data types shared by the estimator, the HAL and the firmware: sensor
+// samples stamped in microseconds at the sensor, site configuration (anchors,
+// tags, platform) and estimator outputs. No Eigen here: these cross the HAL.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+
+#include "estimator/status.hpp"
+
+namespace uwbnav {
+
+// Estimator floating-point type: float on ECUs, double by compile-time switch.
+#ifdef UWBNAV_ESTIMATOR_DOUBLE
+using Real = double;
+#else
+using Real = float;
+#endif
+
+constexpr float kNaNf = std::numeric_limits<float>::quiet_NaN();
+
+struct Vec3f {
+  float x = 0.0F;
+  float y = 0.0F;
+  float z = 0.0F;
+};
+
+// One IMU sample. Body frame FLU (x fwd, y left, z up), as format v1.
+struct ImuSample {
+  uint64_t t_us = 0;            // sensor timestamp [us]
+  Vec3f accel_body_mps2;        // specific force, body frame [m/s^2]; level at rest: +9.81 on z
+  Vec3f gyro_body_radps;        // angular rate, body frame [rad/s]
+};
+
+// One two-way range from a tag on the vehicle to a fixed anchor.
+struct UwbRange {
+  uint64_t t_us = 0;            // sensor timestamp of the ranging exchange [us]
+  uint16_t anchor_id = 0;       // anchor id as surveyed (anchors.csv)
+  uint8_t tag_id = 0;           // tag id on the vehicle (tags.csv), 0 by default
+  float range_m = 0.0F;         // antenna-to-antenna distance [m]
+  float fp_power_dbm = kNaNf;   // first-path power [dBm], NaN when unknown
+  float rx_power_dbm = kNaNf;   // total received power [dBm], NaN when unknown
+};
+
+constexpr size_t kMaxAnchors = 16;  // capacity of the anchor table
+constexpr size_t kMaxTags = 4;      // capacity of the tag table
+
+struct Anchor {
+  uint16_t id = 0;
+  Vec3f pos_nav_m;              // surveyed antenna position, navigation frame (ENU-like, z up) [m]
+};
+
+struct Tag {
+  uint8_t id = 0;
+  Vec3f lever_body_m;           // antenna position in the body frame (FLU) [m]
+};
+
+enum class Platform : uint8_t { kGround = 0, kAir = 1 };
+
+// Everything the firmware must know about the site and the vehicle. Filled by
+// the board (recording, simulator, parameter store) once at start-up.
+struct SiteConfig {
+  Anchor anchors[kMaxAnchors];
+  size_t num_anchors = 0;
+  Tag tags[kMaxTags];
+  size_t num_tags = 0;
+  Platform platform = Platform::kGround;
+  float gravity_mps2 = 9.80665F;  // local gravity magnitude [m/s^2]
+  float uwb_sigma_m = 0.10F;      // nominal ranging 1-sigma [m] (meta.ini uwb_sigma_m)
+  bool has_imu = true;            // false for UWB-only recordings
+
+  // Returns index into anchors[] or -1 when unknown.
+  int find_anchor(uint16_t id) const {
+    for (size_t i = 0; i < num_anchors; ++i) {
+      if (anchors[i].id == id) return static_cast<int>(i);
+    }
+    return -1;
+  }
+  int find_tag(uint8_t id) const {
+    for (size_t i = 0; i < num_tags; ++i) {
+      if (tags[i].id == id) return static_cast<int>(i);
+    }
+    return -1;
+  }
+  [[nodiscard]] Status add_anchor(uint16_t id, Vec3f pos_nav_m) {
+    if (find_anchor(id) >= 0) return Status::kInvalidArgument;
+    if (num_anchors >= kMaxAnchors) return Status::kFull;
+    anchors[num_anchors++] = Anchor{id, pos_nav_m};
+    return Status::kOk;
+  }
+  [[nodiscard]] Status add_tag(uint8_t id, Vec3f lever_body_m) {
+    if (find_tag(id) >= 0) return Status::kInvalidArgument;
+    if (num_tags >= kMaxTags) return Status::kFull;
+    tags[num_tags++] = Tag{id, lever_body_m};
+    return Status::kOk;
+  }
+};
+
+// Navigation solution status, as published in estimates.csv and on CAN.
+enum class NavStatus : uint8_t {
+  kInitialising = 0,  // no fix yet (waiting for ranges / levelling)
+  kValid = 1,         // nominal: IMU + UWB fused, covariance within bounds
+  kDegraded = 2,      // coasting (UWB outage) or UWB-only (no IMU); usable with care
+  kInvalid = 3,       // no trustworthy solution (diverged, reset pending)
+};
+
+constexpr const char* nav_status_name(NavStatus s) {
+  switch (s) {
+    case NavStatus::kInitialising: return "initialising";
+    case NavStatus::kValid: return "valid";
+    case NavStatus::kDegraded: return "degraded";
+    case NavStatus::kInvalid: return "invalid";
+  }
+  return "unknown";
+}
+
+// Output of the estimator every 10 ms cycle (body origin, navigation frame).
+struct NavOutput {
+  uint64_t t_us = 0;
+  NavStatus status = NavStatus::kInitialising;
+  Vec3f pos_nav_m;               // body origin position [m]
+  Vec3f vel_nav_mps;             // body origin velocity [m/s]
+  float q_nav_body[4] = {1.0F, 0.0F, 0.0F, 0.0F};  // Hamilton, scalar first, body->nav
+  Vec3f pos_sigma_m;             // claimed 1-sigma per axis [m]
+  float pos_xy_corr = 0.0F;      // correlation coefficient of x/y position errors [-]
+  Vec3f vel_sigma_mps;           // claimed 1-sigma velocity per axis [m/s]
+  float heading_rad = 0.0F;      // yaw of body x axis from nav x axis, CCW positive [rad]
+  uint16_t ranges_used = 0;      // ranges fused since the previous output
+  uint16_t ranges_rejected = 0;  // ranges rejected since the previous output
+  uint32_t resets = 0;           // filter resets since start
+};
+
+// What the estimator decided about one range, for ranges.csv, CAN and console.
+struct RangeReport {
+  uint64_t t_us = 0;
+  uint16_t anchor_id = 0;
+  uint8_t tag_id = 0;
+  float range_m = 0.0F;
+  float innovation_m = kNaNf;    // measured minus predicted range [m], NaN if not computed
+  float innovation_var_m2 = kNaNf;  // innovation variance S [m^2]
+  float p_svm = kNaNf;           // SVM NLOS probability p1 (seed 000 §1.2(1)), NaN if not run
+  float p_mc = kNaNf;            // consistency-model NLOS probability p2 (eq. 6)
+  float p_fused = kNaNf;         // fused NLOS probability R (eq. 8) or the policy's evidence
+  bool nlos = false;             // the gating layer's NLOS decision
+  bool used = false;             // fused into the filter
+};
+
+}  // namespace uwbnav

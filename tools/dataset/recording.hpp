@@ -1,0 +1,105 @@
+// Host-side model of a format v1 recording (docs/dataset-format.md) and of the
+// replay outputs, with the reader and writers. Host only: uses the heap and files.
+#pragma once
+
+#include <cstdint>
+#include <cstdio>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "estimator/status.hpp"
+#include "estimator/types.hpp"
+
+namespace uwbnav::dataset {
+
+// One uwb.csv row: the range plus its evaluation-only label.
+struct UwbRow {
+  UwbRange range;
+  int8_t nlos_label = -1;  // 1 NLOS, 0 LOS, -1 unknown. Never read by the estimator.
+};
+
+// One truth.csv row (body origin in the navigation frame).
+struct TruthRow {
+  uint64_t t_us = 0;
+  double pos_nav_m[3] = {0, 0, 0};
+  bool has_attitude = false;
+  double q_nav_body[4] = {1, 0, 0, 0};  // Hamilton, scalar first, body -> nav
+};
+
+struct Recording {
+  std::string dir;                          // where it was read from (may be empty)
+  std::map<std::string, std::string> meta;  // meta.ini key = value
+  SiteConfig site;                          // anchors, tags, platform, gravity, uwb sigma, has_imu
+  std::vector<ImuSample> imu;               // empty for UWB-only recordings
+  std::vector<UwbRow> uwb;
+  std::vector<TruthRow> truth;              // empty when the recording has no truth
+  std::string name() const;                 // meta "name" or the directory's last component
+};
+
+// What the reader skipped, for the warning lines and the tests.
+struct ReadReport {
+  size_t rows_read = 0;       // data rows accepted over all files
+  size_t rows_skipped = 0;    // data rows rejected over all files
+  std::vector<std::string> warnings;  // "uwb.csv:123: <reason>", capped (see kMaxWarnings)
+  static constexpr size_t kMaxWarnings = 200;
+};
+
+// Reads a format v1 directory. Bad rows (unparsable, NaN/Inf, wrong column
+// count, backwards time, negative ids) are skipped, counted and warned about
+// with file and line number; they never reach `out`. Fails (non-kOk) only when
+// a required file is missing/unreadable, a header is wrong, or anchors.csv
+// yields no usable anchor.
+[[nodiscard]] Status read_recording(const std::string& dir, Recording& out, ReadReport& report);
+
+// Writes `rec` as a format v1 directory (creating it). Floats are written with
+// enough digits to round-trip the estimator's input exactly.
+[[nodiscard]] Status write_recording(const std::string& dir, const Recording& rec);
+
+// Streaming writers for the replay outputs (estimates.csv, ranges.csv).
+class EstimatesWriter {
+ public:
+  EstimatesWriter() = default;
+  ~EstimatesWriter();
+  EstimatesWriter(const EstimatesWriter&) = delete;
+  EstimatesWriter& operator=(const EstimatesWriter&) = delete;
+  [[nodiscard]] Status open(const std::string& path);
+  [[nodiscard]] Status write(const NavOutput& out);
+  [[nodiscard]] Status close();
+
+ private:
+  std::FILE* f_ = nullptr;
+};
+
+class RangesWriter {
+ public:
+  RangesWriter() = default;
+  ~RangesWriter();
+  RangesWriter(const RangesWriter&) = delete;
+  RangesWriter& operator=(const RangesWriter&) = delete;
+  [[nodiscard]] Status open(const std::string& path);
+  // `nlos_label` is not written (ranges.csv's nlos column is the decision).
+  [[nodiscard]] Status write(const RangeReport& report);
+  [[nodiscard]] Status close();
+
+ private:
+  std::FILE* f_ = nullptr;
+};
+
+// Readers for replay outputs (evaluation, tests). Rows that do not parse are skipped and counted.
+struct EstimateRow {
+  uint64_t t_us = 0;
+  double pos_nav_m[3] = {0, 0, 0};
+  double vel_nav_mps[3] = {0, 0, 0};
+  double q_nav_body[4] = {1, 0, 0, 0};
+  double pos_sigma_m[3] = {0, 0, 0};
+  int status = 0;
+};
+[[nodiscard]] Status read_estimates(const std::string& path, std::vector<EstimateRow>& out, ReadReport& report);
+[[nodiscard]] Status read_ranges(const std::string& path, std::vector<RangeReport>& out, ReadReport& report);
+
+// Microseconds <-> seconds as used in the CSV files.
+uint64_t seconds_to_us(double t_s);
+double us_to_seconds(uint64_t t_us);
+
+}  // namespace uwbnav::dataset
