@@ -5,8 +5,12 @@
 
 #include <cstdint>
 
+#include "estimator/ekf_core.hpp"
 #include "estimator/gating.hpp"
+#include "estimator/ls_taylor.hpp"
+#include "estimator/nlos/gating_layer.hpp"
 #include "estimator/params.hpp"
+#include "estimator/rest_detector.hpp"
 #include "estimator/status.hpp"
 #include "estimator/types.hpp"
 
@@ -69,7 +73,134 @@ class Navigator {
   float covariance(size_t row, size_t col) const;
 
  private:
-  // Implementation members: see navigator.cpp.
+  // Initialisation phases (docs/ekf.md): fix -> levelling/heading -> running.
+  enum class Phase : uint8_t { kWaitFix, kWaitHeading, kRunning };
+
+  // Parameter values in the estimator's types (refreshed by update_params).
+  struct Config {
+    ImuNoise imu;
+    Real gyro_bias_init = Real(8.7e-3);
+    Real accel_bias_init = Real(0.15);
+    Real uwb_sigma_m = Real(0.1);
+    uint64_t imu_timeout_us = 100000;
+    uint64_t uwb_timeout_us = 1000000;
+    bool ground_constraints = true;  // effective: param and Platform::kGround
+    Real nhc_sigma_lat = Real(0.1);
+    Real nhc_sigma_vert = Real(0.1);
+    Real zupt_sigma = Real(0.02);
+    Real zaru_sigma = Real(2e-3);
+    int height_mode = 2;
+    Real height_sigma = Real(0.1);
+    Real origin_height = Real(0);
+    uint64_t constraint_period_us = 100000;
+    Real cv_accel_psd = Real(1);
+    uint64_t init_window_us = 300000;
+    Real init_heading_dist = Real(3);
+    uint64_t init_heading_timeout_us = 30000000;
+    Real planar_spread = Real(1);
+    Real diverge_nis = Real(25);
+    Real diverge_fraction = Real(0.8);
+    uint64_t diverge_window_us = 4000000;
+    Real degraded_sigma = Real(1);
+    Real init_speed = Real(1);
+  };
+
+  // Latest range per anchor/tag pair (initial fix).
+  struct PairRange {
+    uint64_t t_us = 0;
+    float range_m = 0.0F;
+    bool valid = false;
+  };
+  // One LS fix of the initialisation track.
+  struct TrackFix {
+    uint64_t t_us = 0;
+    Vec3 tag_pos_nav_m = Vec3::Zero();
+    Real sigma_h_m = Real(0);   // horizontal 1-sigma of the fix [m]
+    Real yaw_rel_rad = Real(0); // gyro-integrated yaw of the levelled attitude at t_us
+    int tag_index = -1;
+  };
+  static constexpr size_t kTrackCapacity = 64;
+  static constexpr size_t kMonitorCapacity = 128;
+
+  // navigator_init.cpp
+  void restart(bool counted_reset);
+  void init_on_imu(const ImuSample& imu);
+  void init_on_range(int anchor_index, int tag_index, const UwbRange& range);
+  bool try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix);
+  void try_heading(uint64_t t_us);
+  bool track_moving(uint64_t t_us) const;
+  void start_filter(uint64_t t_us, const TrackFix& fix, Real yaw_rad, Real yaw_sigma_rad, const Vec3& vel_nav_mps,
+                    Real vel_sigma_mps);
+  void setup_height(Real origin_z_m);
+  void start_cv_filter(uint64_t t_us, const TrackFix& fix);
+
+  // navigator.cpp
+  bool imu_alive(uint64_t t_us) const;
+  void enter_cv_mode();
+  void recover_imu_mode();
+  void apply_constraints(uint64_t t_us);
+  bool fuse(const ScalarObs& obs);
+  void check_health();
+  void monitor_divergence(uint64_t t_us, Real nis);
+  Vec3 lever(int tag_index) const;
+
+  SiteConfig site_;
+  Params params_;
+  Config cfg_;
+  bool configured_ = false;
+  GatingLayer gating_;
+  EkfCore ekf_;
+  RestDetector rest_;
+  NavDiagnostics diag_;
+  AnchorStatus anchor_status_[kMaxAnchors];
+
+  Phase phase_ = Phase::kWaitFix;
+  bool after_failure_ = false;   // status invalid (not initialising) until running again
+  bool cv_mode_ = false;         // running on the constant-velocity model (no IMU)
+  bool planar_ = false;          // anchors near-planar: 2-D fix, height constraint (auto)
+  bool height_on_ = false;
+  Real height_ref_m_ = Real(0);  // body-origin height held by the constraint [m]
+  uint64_t t_state_us_ = 0;      // time of the filter state [us]
+  uint64_t running_since_us_ = 0;  // time the filter (re)started [us]
+  uint64_t last_constraint_us_ = 0;
+  uint64_t imu_mode_since_us_ = 0;  // IMU back after an outage: re-levelling pending
+
+  bool have_prev_imu_ = false;
+  ImuSample prev_imu_;
+  Vec3 last_gyro_body_radps_ = Vec3::Zero();
+
+  // Initialisation state.
+  PairRange pair_[kMaxAnchors][kMaxTags];
+  uint64_t first_range_t_us_ = 0;
+  uint64_t first_imu_t_us_ = 0;
+  uint64_t last_fix_attempt_us_ = 0;
+  uint64_t window_us_ = 0;        // current (growing) fix window
+  uint64_t window_grow_t_us_ = 0;
+  bool levelled_ = false;
+  bool levelled_at_rest_ = false;
+  Quat q_init_ = Quat(1, 0, 0, 0);  // levelled attitude, yaw relative to the unknown start yaw
+  Vec3 bg_init_ = Vec3::Zero();
+  TrackFix track_[kTrackCapacity];
+  size_t track_head_ = 0;
+  size_t track_count_ = 0;
+  TrackFix last_fix_per_tag_[kMaxTags];
+  Real last_fix_sigma_z_m_ = Real(1);  // vertical 1-sigma of the latest fix [m]
+  uint64_t heading_wait_since_us_ = 0;
+  bool have_fix_ = false;
+  Vec3 last_fix_origin_nav_m_ = Vec3::Zero();  // output while initialising
+
+  // Per anchor/tag pair: filter tag position at the previous range (gating context).
+  Vec3 prev_tag_pos_[kMaxAnchors][kMaxTags];
+  bool prev_tag_valid_[kMaxAnchors][kMaxTags] = {};
+
+  // Divergence monitor: per-range NIS flags in a time window.
+  uint64_t monitor_t_us_[kMonitorCapacity] = {};
+  bool monitor_bad_[kMonitorCapacity] = {};
+  size_t monitor_head_ = 0;
+  size_t monitor_count_ = 0;
+
+  uint16_t cycle_used_ = 0;
+  uint16_t cycle_rejected_ = 0;
 };
 
 }  // namespace uwbnav

@@ -15,11 +15,14 @@ cross_pkgs=(
   gcc-arm-none-eabi libstdc++-arm-none-eabi-picolibc picolibc-arm-none-eabi
   qemu-system-arm qemu-user
   g++-aarch64-linux-gnu libc6-dev-arm64-cross
+  googletest libsvm-dev:arm64
 )
 
 pkgs=("${host_pkgs[@]}")
+cross=0
 if [[ "${1:-}" != "--host-only" ]]; then
   pkgs+=("${cross_pkgs[@]}")
+  cross=1
 fi
 
 missing=()
@@ -38,6 +41,10 @@ echo "bootstrap: installing ${#missing[@]} package(s): ${missing[*]}"
 SUDO=""
 if [[ $(id -u) -ne 0 ]]; then SUDO="sudo"; fi
 export DEBIAN_FRONTEND=noninteractive
+# The aarch64 build links libsvm from Debian's arm64 package (multiarch).
+if [[ $cross -eq 1 ]] && ! dpkg --print-foreign-architectures | grep -qx arm64; then
+  $SUDO dpkg --add-architecture arm64
+fi
 $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
 echo "bootstrap: done"

@@ -6,12 +6,14 @@ namespace uwbnav::cli {
 int cmd_sim(int argc, char** argv);
 int cmd_replay(int argc, char** argv);
 int cmd_run(int argc, char** argv);
+int cmd_params(int argc, char** argv);
 
 const std::vector<Command>& commands() {
   static const std::vector<Command> table = {
       {"run", "main job: simulate the default scenario, run the firmware loop, print the result table", cmd_run},
       {"sim", "simulate a scenario into a format v1 recording: sim SCENARIO --out DIR [--seed N]", cmd_sim},
       {"replay", "run the firmware loop in lockstep over a recording: replay DIR --out OUT", cmd_replay},
+      {"params", "print the parameter table (--markdown: docs/parameters.md)", cmd_params},
   };
   return table;
 }

@@ -42,8 +42,13 @@ struct ReadReport {
   size_t rows_read = 0;       // data rows accepted over all files
   size_t rows_skipped = 0;    // data rows rejected over all files
   std::vector<std::string> warnings;  // "uwb.csv:123: <reason>", capped (see kMaxWarnings)
+  size_t warnings_dropped = 0;        // warnings not stored because the cap was reached
+  std::string error;                  // "uwb.csv:1: <reason>" when a read fails (non-kOk)
   static constexpr size_t kMaxWarnings = 200;
 };
+
+// Prints the warnings (and how many were dropped) one per line to `out`.
+void print_warnings(const ReadReport& report, std::FILE* out);
 
 // Reads a format v1 directory. Bad rows (unparsable, NaN/Inf, wrong column
 // count, backwards time, negative ids) are skipped, counted and warned about

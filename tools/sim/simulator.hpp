@@ -8,6 +8,7 @@
 
 #include "estimator/status.hpp"
 #include "tools/dataset/recording.hpp"
+#include "tools/sim/scenario.hpp"
 
 namespace uwbnav::sim {
 
@@ -17,6 +18,56 @@ std::vector<std::string> preset_names();
 // Runs a built-in preset (by name) or a scenario file (by path). Same seed ->
 // bit-identical recording. `error` receives a one-line reason on failure.
 [[nodiscard]] Status simulate(const std::string& scenario, uint64_t seed, dataset::Recording& out,
+                              std::string* error);
+
+// ---- Extended interface (tests, evaluation) ----
+
+struct SimOptions {
+  uint64_t seed = 0;
+  bool ideal_imu = false;  // no bias, noise, quantisation: IMU = exact truth derivatives
+  bool ideal_uwb = false;  // no noise, NLOS bias, outliers or packet loss (outages still apply)
+};
+
+// Why a range deviates from the true distance (evaluation only).
+enum class RangeCause : uint8_t {
+  kLos = 0,       // noise only
+  kBox = 1,       // blocked by an obstacle box (may also be body-blocked)
+  kBody = 2,      // blocked by the vehicle body only
+  kOutlier = 3,   // gross outlier (possibly on top of a blocked path)
+  kProtocol = 4,  // seed 000 §2.1 protocol: added error, labelled NLOS
+};
+
+// Per-range ground truth, parallel to Recording::uwb.
+struct RangeTruth {
+  double true_range_m = 0.0;  // tag antenna (truth pos + R lever) to anchor [m]
+  double bias_m = 0.0;        // NLOS / outlier / protocol error added on top of the LOS noise [m]
+  RangeCause cause = RangeCause::kLos;
+};
+
+// Full truth at every IMU instant, parallel to Recording::truth.
+struct TruthState {
+  uint64_t t_us = 0;
+  double pos_nav_m[3] = {0, 0, 0};
+  double vel_nav_mps[3] = {0, 0, 0};
+  double acc_nav_mps2[3] = {0, 0, 0};
+  double q_nav_body[4] = {1, 0, 0, 0};      // Hamilton, scalar first, body -> nav
+  double gyro_body_radps[3] = {0, 0, 0};    // true body rate
+  double accel_body_mps2[3] = {0, 0, 0};    // true specific force (FLU, +g on z at rest)
+};
+
+struct SimOutput {
+  dataset::Recording rec;
+  std::vector<TruthState> truth;         // same instants as rec.truth / rec.imu
+  std::vector<RangeTruth> range_truth;   // same order as rec.uwb
+  Scenario scenario;                     // what was simulated
+};
+
+// Simulates a parsed scenario.
+[[nodiscard]] Status simulate_scenario(const Scenario& scenario, const SimOptions& options, SimOutput& out,
+                                       std::string* error);
+
+// Loads a preset or file, then simulates it.
+[[nodiscard]] Status simulate(const std::string& scenario, const SimOptions& options, SimOutput& out,
                               std::string* error);
 
 }  // namespace uwbnav::sim

@@ -1,0 +1,179 @@
+// Error-state EKF core (seed 003 §2.1-2.2 state and update, error-state form):
+// IMU mechanisation, block-sparse covariance propagation, scalar updates.
+#include "estimator/ekf_core.hpp"
+
+#include <cmath>
+
+namespace uwbnav {
+namespace {
+
+// Variance floors and ceilings per block (1-sigma^2): below a floor the filter
+// would stop listening to measurements; above a ceiling linearisation is void.
+constexpr Real kFloorVar[5] = {Real(1e-6), Real(1e-6), Real(1e-9), Real(1e-10), Real(1e-12)};
+constexpr Real kCeilVar[5] = {Real(1e6), Real(1e4), Real(4.0), Real(4.0), Real(0.25)};
+// The state is declared exploded beyond these magnitudes.
+constexpr Real kMaxPos_m = Real(1e6);
+constexpr Real kMaxVel_mps = Real(1e3);
+constexpr Real kMaxBiasAccel_mps2 = Real(20);
+constexpr Real kMaxBiasGyro_radps = Real(2);
+
+constexpr int P = ErrIdx::kPos;
+constexpr int V = ErrIdx::kVel;
+constexpr int A = ErrIdx::kAtt;
+constexpr int BA = ErrIdx::kBa;
+constexpr int BG = ErrIdx::kBg;
+
+}  // namespace
+
+EkfCore::EkfCore() {
+  p_.setIdentity();
+  c_nav_body_.setIdentity();
+  phi_p_.setZero();
+  u_.setZero();
+}
+
+void EkfCore::init(const NominalState& x, const ErrVec& sigma) {
+  x_ = x;
+  x_.q_nav_body = quat_normalised(x_.q_nav_body);
+  p_.setZero();
+  for (int i = 0; i < kN; ++i) p_(i, i) = sigma(i) * sigma(i);
+  refresh_dcm();
+}
+
+void EkfCore::refresh_dcm() { c_nav_body_ = quat_to_dcm(x_.q_nav_body); }
+
+void EkfCore::predict_imu(const Vec3& accel_mean_body_mps2, const Vec3& gyro_mean_body_radps, Real dt_s,
+                          Real gravity_mps2, const ImuNoise& noise) {
+  // Nominal mechanisation (seed 003 eq. 5, 10, 12 with the corrected biases).
+  const Vec3 w_body = gyro_mean_body_radps - x_.bg_body_radps;
+  const Vec3 f_body = accel_mean_body_mps2 - x_.ba_body_mps2;
+  const Quat q_mid = quat_mul(x_.q_nav_body, quat_exp(w_body * (Real(0.5) * dt_s)));
+  const Mat3 c_mid = quat_to_dcm(q_mid);
+  const Vec3 f_nav = c_mid * f_body;
+  Vec3 acc_nav = f_nav;
+  acc_nav.z() -= gravity_mps2;
+  const Vec3 v_old = x_.vel_nav_mps;
+  x_.vel_nav_mps += acc_nav * dt_s;
+  x_.pos_nav_m += (v_old + x_.vel_nav_mps) * (Real(0.5) * dt_s);
+  x_.q_nav_body = quat_normalised(quat_mul(x_.q_nav_body, quat_exp(w_body * dt_s)));
+  refresh_dcm();
+
+  // Transition matrix Phi = I + A dt + A^2 dt^2/2 + A^3 dt^3/6 (seed 003 eq. 14
+  // in error-state form; the series terminates: A is nilpotent here). Non-zero
+  // off-diagonal blocks only:
+  const Real dt2 = dt_s * dt_s;
+  const Mat3 fx = skew(f_nav);
+  const Mat3 phi_pa = fx * (-Real(0.5) * dt2);
+  const Mat3 phi_pba = c_mid * (-Real(0.5) * dt2);
+  const Mat3 fxc = fx * c_mid;
+  const Mat3 phi_pbg = fxc * (dt2 * dt_s / Real(6));
+  const Mat3 phi_va = fx * (-dt_s);
+  const Mat3 phi_vba = c_mid * (-dt_s);
+  const Mat3 phi_vbg = fxc * (Real(0.5) * dt2);
+  const Mat3 phi_abg = c_mid * (-dt_s);
+
+  // P <- Phi P (block rows, in place: each row block only reads rows updated later).
+  p_.middleRows<3>(P) += dt_s * p_.middleRows<3>(V) + phi_pa * p_.middleRows<3>(A) +
+                         phi_pba * p_.middleRows<3>(BA) + phi_pbg * p_.middleRows<3>(BG);
+  p_.middleRows<3>(V) += phi_va * p_.middleRows<3>(A) + phi_vba * p_.middleRows<3>(BA) +
+                         phi_vbg * p_.middleRows<3>(BG);
+  p_.middleRows<3>(A) += phi_abg * p_.middleRows<3>(BG);
+  // P <- (Phi P) Phi^T (block columns, same order).
+  p_.middleCols<3>(P) += dt_s * p_.middleCols<3>(V) + p_.middleCols<3>(A) * phi_pa.transpose() +
+                         p_.middleCols<3>(BA) * phi_pba.transpose() + p_.middleCols<3>(BG) * phi_pbg.transpose();
+  p_.middleCols<3>(V) += p_.middleCols<3>(A) * phi_va.transpose() + p_.middleCols<3>(BA) * phi_vba.transpose() +
+                         p_.middleCols<3>(BG) * phi_vbg.transpose();
+  p_.middleCols<3>(A) += p_.middleCols<3>(BG) * phi_abg.transpose();
+
+  // Q: white accel noise integrated into v and p, white gyro noise into the
+  // attitude, random walks into the biases (isotropic, so frame-free).
+  const Real qa = noise.accel_noise * noise.accel_noise;
+  const Real qg = noise.gyro_noise * noise.gyro_noise;
+  const Real qba = noise.accel_bias_rw * noise.accel_bias_rw * dt_s;
+  const Real qbg = noise.gyro_bias_rw * noise.gyro_bias_rw * dt_s;
+  for (int i = 0; i < 3; ++i) {
+    p_(P + i, P + i) += qa * dt2 * dt_s / Real(3);
+    p_(P + i, V + i) += qa * dt2 * Real(0.5);
+    p_(V + i, P + i) += qa * dt2 * Real(0.5);
+    p_(V + i, V + i) += qa * dt_s;
+    p_(A + i, A + i) += qg * dt_s;
+    p_(BA + i, BA + i) += qba;
+    p_(BG + i, BG + i) += qbg;
+  }
+}
+
+void EkfCore::predict_cv(Real dt_s, Real accel_psd) {
+  x_.pos_nav_m += x_.vel_nav_mps * dt_s;
+  p_.middleRows<3>(P) += dt_s * p_.middleRows<3>(V);
+  p_.middleCols<3>(P) += dt_s * p_.middleCols<3>(V);
+  const Real qa = accel_psd * accel_psd;
+  const Real dt2 = dt_s * dt_s;
+  for (int i = 0; i < 3; ++i) {
+    p_(P + i, P + i) += qa * dt2 * dt_s / Real(3);
+    p_(P + i, V + i) += qa * dt2 * Real(0.5);
+    p_(V + i, P + i) += qa * dt2 * Real(0.5);
+    p_(V + i, V + i) += qa * dt_s;
+  }
+}
+
+Real EkfCore::innovation_variance(const ErrRow& h, Real r_var) const { return (h * p_ * h.transpose())(0, 0) + r_var; }
+
+UpdateResult EkfCore::update(const ScalarObs& obs) {
+  UpdateResult res;
+  u_.noalias() = p_ * obs.h.transpose();
+  const Real s = obs.h.dot(u_) + obs.r_var;
+  res.innovation_var = s;
+  if (!(s > Real(0)) || !std::isfinite(s) || !std::isfinite(obs.innovation)) return res;
+  const Real inv_s = Real(1) / s;
+  for (int i = 0; i < kN; ++i) {
+    if (p_(i, i) - u_(i) * u_(i) * inv_s < Real(0)) return res;  // ArduPilot-style refusal
+  }
+  // Joseph form with the optimal scalar gain K = u / S (see header).
+  p_.noalias() -= (u_ * inv_s) * u_.transpose();
+  inject(u_ * (obs.innovation * inv_s));
+  res.applied = true;
+  return res;
+}
+
+void EkfCore::inject(const ErrVec& dx) {
+  x_.pos_nav_m += dx.segment<3>(P);
+  x_.vel_nav_mps += dx.segment<3>(V);
+  x_.q_nav_body = quat_normalised(quat_mul(quat_exp(dx.segment<3>(A)), x_.q_nav_body));
+  x_.ba_body_mps2 += dx.segment<3>(BA);
+  x_.bg_body_radps += dx.segment<3>(BG);
+  refresh_dcm();
+}
+
+bool EkfCore::sanitise() {
+  if (!p_.allFinite() || !x_.pos_nav_m.allFinite() || !x_.vel_nav_mps.allFinite() || !x_.q_nav_body.allFinite() ||
+      !x_.ba_body_mps2.allFinite() || !x_.bg_body_radps.allFinite()) {
+    return false;
+  }
+  if (x_.pos_nav_m.cwiseAbs().maxCoeff() > kMaxPos_m || x_.vel_nav_mps.norm() > kMaxVel_mps ||
+      x_.ba_body_mps2.norm() > kMaxBiasAccel_mps2 || x_.bg_body_radps.norm() > kMaxBiasGyro_radps) {
+    return false;
+  }
+  for (int i = 0; i < kN; ++i) {
+    const int blk = i / 3;
+    const Real d = p_(i, i);
+    if (d > kCeilVar[blk]) {
+      const Real scale = std::sqrt(kCeilVar[blk] / d);
+      p_.row(i) *= scale;
+      p_.col(i) *= scale;
+    } else if (d < kFloorVar[blk]) {
+      p_(i, i) = kFloorVar[blk];
+    }
+  }
+  // Symmetrise (predict accumulates tiny asymmetries from the block products).
+  p_ = (Real(0.5) * (p_ + p_.transpose())).eval();
+  return true;
+}
+
+void EkfCore::decouple_inertial(const ErrVec& sigma) {
+  p_.block<kN - A, A>(A, 0).setZero();
+  p_.block<A, kN - A>(0, A).setZero();
+  p_.block<kN - A, kN - A>(A, A).setZero();
+  for (int i = A; i < kN; ++i) p_(i, i) = sigma(i) * sigma(i);
+}
+
+}  // namespace uwbnav

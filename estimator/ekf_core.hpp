@@ -1,0 +1,88 @@
+// Error-state EKF core: nominal-state propagation from IMU samples (or a
+// constant-velocity model without IMU), sparse covariance propagation,
+// sequential scalar updates with error injection, and covariance hygiene.
+// Static memory only; scratch matrices are members.
+#pragma once
+
+#include "estimator/ekf_state.hpp"
+
+namespace uwbnav {
+
+// Continuous-time noise densities of the IMU (params 100-103).
+struct ImuNoise {
+  Real accel_noise = Real(2e-3);     // [m/s^2/sqrt(Hz)]
+  Real gyro_noise = Real(2.9e-5);    // [rad/s/sqrt(Hz)]
+  Real accel_bias_rw = Real(1e-4);   // [m/s^3/sqrt(Hz)]
+  Real gyro_bias_rw = Real(1e-5);    // [rad/s^2/sqrt(Hz)]
+};
+
+// One scalar measurement linearised about the nominal state.
+struct ScalarObs {
+  ErrRow h = ErrRow::Zero();  // d(measurement)/d(error state)
+  Real innovation = Real(0);  // measured - predicted
+  Real r_var = Real(1);       // measurement variance
+};
+
+// Outcome of one scalar update.
+struct UpdateResult {
+  Real innovation_var = Real(0);  // S = H P H^T + R
+  bool applied = false;           // false: S not positive/finite or a variance would go negative
+};
+
+class EkfCore {
+ public:
+  EkfCore();
+
+  // Starts from `x` with a diagonal covariance of the given 1-sigmas.
+  void init(const NominalState& x, const ErrVec& sigma);
+
+  // One IMU interval of dt_s between two samples (trapezoid of the two
+  // samples' rates and specific forces is done by the caller: pass the means).
+  // Attitude: exact quaternion exponential of the mean rate; velocity: mean
+  // specific force rotated with the mid-interval attitude; position: trapezoid.
+  void predict_imu(const Vec3& accel_mean_body_mps2, const Vec3& gyro_mean_body_radps, Real dt_s,
+                   Real gravity_mps2, const ImuNoise& noise);
+
+  // Constant-velocity model (no IMU): white acceleration of density
+  // accel_psd [m/s^2/sqrt(Hz)] in every nav axis; attitude and biases frozen.
+  void predict_cv(Real dt_s, Real accel_psd);
+
+  // Variance of the innovation of `obs` (H P H^T + R).
+  Real innovation_variance(const ErrRow& h, Real r_var) const;
+
+  // Scalar update and immediate injection into the nominal state. The
+  // covariance update is the Joseph form written for a scalar with the optimal
+  // gain, P+ = P - u u^T / S with u = P H^T (algebraically identical to
+  // (I-KH)P(I-KH)^T + K R K^T), exactly symmetric; refused when it would
+  // drive a variance negative.
+  UpdateResult update(const ScalarObs& obs);
+
+  // Clamps variances to [floor, ceiling] (row/column scaling keeps P positive
+  // semi-definite) and symmetrises. Returns false when P or x is not finite or
+  // the state exploded (caller resets).
+  bool sanitise();
+
+  // Removes the correlation of attitude and biases with position/velocity and
+  // resets their variances (entering the constant-velocity mode).
+  void decouple_inertial(const ErrVec& sigma);
+
+  const NominalState& state() const { return x_; }
+  NominalState& mutable_state() { return x_; }
+  const ErrCov& cov() const { return p_; }
+  ErrCov& mutable_cov() { return p_; }
+  const Mat3& dcm() const { return c_nav_body_; }
+  // Refreshes the cached rotation matrix after the attitude was changed outside.
+  void refresh_dcm();
+
+ private:
+  void inject(const ErrVec& dx);
+
+  NominalState x_;
+  ErrCov p_;
+  Mat3 c_nav_body_;
+  // Scratch (members, not function statics).
+  ErrCov phi_p_;  // Phi * P (block rows)
+  ErrVec u_;      // P H^T
+};
+
+}  // namespace uwbnav

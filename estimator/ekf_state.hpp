@@ -1,0 +1,132 @@
+// Error-state layout of the UWB/IMU EKF (seed 003 §2.1 state: position,
+// velocity, attitude, accelerometer bias, gyro bias), fixed-size Eigen types
+// in the estimator's Real, and small quaternion helpers.
+//
+// Conventions (written once, used everywhere):
+//  - nav frame: the anchors' frame, ENU-like, z up; body frame FLU.
+//  - q_nav_body: Hamilton, scalar first, rotates body vectors into nav:
+//    v_nav = C(q) v_body, C(q) as seed 003 eq. 6.
+//  - attitude error: nav-frame small angle dtheta with
+//    q_true = Exp(dtheta) (x) q_nominal, i.e. C_true = (I + [dtheta]x) C.
+//  - IMU model: accel_meas = f_true + b_a + noise, gyro_meas = w_true + b_g + noise.
+#pragma once
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <cstddef>
+
+#include "estimator/types.hpp"
+
+namespace uwbnav {
+
+// Index of each 3-vector block of the error state.
+struct ErrIdx {
+  static constexpr int kPos = 0;    // dp_nav [m]
+  static constexpr int kVel = 3;    // dv_nav [m/s]
+  static constexpr int kAtt = 6;    // dtheta_nav [rad]
+  static constexpr int kBa = 9;     // d b_a (body) [m/s^2]
+  static constexpr int kBg = 12;    // d b_g (body) [rad/s]
+  static constexpr int kSize = 15;
+};
+static_assert(ErrIdx::kPos + 3 == ErrIdx::kVel && ErrIdx::kVel + 3 == ErrIdx::kAtt &&
+                  ErrIdx::kAtt + 3 == ErrIdx::kBa && ErrIdx::kBa + 3 == ErrIdx::kBg &&
+                  ErrIdx::kBg + 3 == ErrIdx::kSize,
+              "error-state blocks must tile 0..15 without gaps");
+static_assert(ErrIdx::kSize == 15, "error state is 15 (seed 003 state without the quaternion's redundant component)");
+
+constexpr int kN = ErrIdx::kSize;
+
+using Vec3 = Eigen::Matrix<Real, 3, 1>;
+using Mat3 = Eigen::Matrix<Real, 3, 3>;
+using Quat = Eigen::Matrix<Real, 4, 1>;  // w, x, y, z (scalar first)
+using ErrVec = Eigen::Matrix<Real, kN, 1>;
+using ErrRow = Eigen::Matrix<Real, 1, kN>;
+using ErrCov = Eigen::Matrix<Real, kN, kN>;
+
+// Nominal (full) state.
+struct NominalState {
+  Vec3 pos_nav_m = Vec3::Zero();      // body origin position [m]
+  Vec3 vel_nav_mps = Vec3::Zero();    // body origin velocity [m/s]
+  Quat q_nav_body = Quat(1, 0, 0, 0); // attitude body -> nav
+  Vec3 ba_body_mps2 = Vec3::Zero();   // accelerometer bias [m/s^2]
+  Vec3 bg_body_radps = Vec3::Zero();  // gyro bias [rad/s]
+};
+
+inline Vec3 to_vec3(const Vec3f& v) {
+  return Vec3(static_cast<Real>(v.x), static_cast<Real>(v.y), static_cast<Real>(v.z));
+}
+inline Vec3f to_vec3f(const Vec3& v) {
+  return Vec3f{static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z())};
+}
+
+inline Mat3 skew(const Vec3& v) {
+  Mat3 m;
+  m << Real(0), -v.z(), v.y(), v.z(), Real(0), -v.x(), -v.y(), v.x(), Real(0);
+  return m;
+}
+
+// Hamilton product a (x) b, scalar first.
+inline Quat quat_mul(const Quat& a, const Quat& b) {
+  return Quat(a(0) * b(0) - a(1) * b(1) - a(2) * b(2) - a(3) * b(3),
+              a(0) * b(1) + a(1) * b(0) + a(2) * b(3) - a(3) * b(2),
+              a(0) * b(2) - a(1) * b(3) + a(2) * b(0) + a(3) * b(1),
+              a(0) * b(3) + a(1) * b(2) - a(2) * b(1) + a(3) * b(0));
+}
+
+// Exact quaternion exponential of a rotation vector (solution of seed 003
+// eq. 5 for a constant rate over the step).
+inline Quat quat_exp(const Vec3& rotvec_rad) {
+  const Real angle = rotvec_rad.norm();
+  const Real half = Real(0.5) * angle;
+  // sin(x)/x with its series below 1e-4 rad (exact to float precision).
+  const Real sinc = angle < Real(1e-4) ? Real(0.5) - angle * angle / Real(48) : std::sin(half) / angle;
+  return Quat(std::cos(half), sinc * rotvec_rad.x(), sinc * rotvec_rad.y(), sinc * rotvec_rad.z());
+}
+
+inline Quat quat_normalised(const Quat& q) {
+  const Real n = q.norm();
+  if (!(n > Real(0)) || !std::isfinite(n)) return Quat(1, 0, 0, 0);
+  const Quat out = q / n;
+  return out(0) < Real(0) ? Quat(-out) : out;  // keep the scalar non-negative
+}
+
+// Rotation matrix body -> nav (seed 003 eq. 6).
+inline Mat3 quat_to_dcm(const Quat& q) {
+  const Real w = q(0), x = q(1), y = q(2), z = q(3);
+  Mat3 c;
+  c << w * w + x * x - y * y - z * z, Real(2) * (x * y - w * z), Real(2) * (x * z + w * y),
+      Real(2) * (x * y + w * z), w * w - x * x + y * y - z * z, Real(2) * (y * z - w * x),
+      Real(2) * (x * z - w * y), Real(2) * (y * z + w * x), w * w - x * x - y * y + z * z;
+  return c;
+}
+
+// Yaw of the body x axis in the nav frame, CCW from nav x (seed 003 eq. 9).
+inline Real quat_yaw(const Quat& q) {
+  return std::atan2(Real(2) * (q(1) * q(2) + q(0) * q(3)), q(0) * q(0) + q(1) * q(1) - q(2) * q(2) - q(3) * q(3));
+}
+
+// Quaternion of a pure rotation about nav z by yaw_rad.
+inline Quat quat_from_yaw(Real yaw_rad) {
+  return Quat(std::cos(Real(0.5) * yaw_rad), Real(0), Real(0), std::sin(Real(0.5) * yaw_rad));
+}
+
+// Roll/pitch-only attitude whose body z axis is along the measured specific
+// force (levelling at rest), yaw zero.
+inline Quat quat_level(const Vec3& accel_body_mps2) {
+  const Real roll = std::atan2(accel_body_mps2.y(), accel_body_mps2.z());
+  const Real pitch = std::atan2(-accel_body_mps2.x(), std::sqrt(accel_body_mps2.y() * accel_body_mps2.y() +
+                                                                 accel_body_mps2.z() * accel_body_mps2.z()));
+  const Quat qr(std::cos(Real(0.5) * roll), std::sin(Real(0.5) * roll), Real(0), Real(0));
+  const Quat qp(std::cos(Real(0.5) * pitch), Real(0), std::sin(Real(0.5) * pitch), Real(0));
+  return quat_mul(qp, qr);  // C = Ry(pitch) Rx(roll), yaw 0
+}
+
+inline Real wrap_pi(Real a) {
+  const Real two_pi = Real(2) * static_cast<Real>(M_PI);
+  if (!std::isfinite(a)) return Real(0);
+  a = std::fmod(a + static_cast<Real>(M_PI), two_pi);
+  if (a < Real(0)) a += two_pi;
+  return a - static_cast<Real>(M_PI);
+}
+
+}  // namespace uwbnav

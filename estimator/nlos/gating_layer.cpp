@@ -1,0 +1,371 @@
+// NLOS gating layer: evidence per range, policy dispatch, epochs, hysteresis,
+// escape and counters (docs/nlos.md).
+#include "estimator/nlos/gating_layer.hpp"
+
+#include <cmath>
+
+#include "estimator/nlos/channel.hpp"
+#include "estimator/nlos/consistency.hpp"
+#include "estimator/nlos/dempster_shafer.hpp"
+#include "estimator/nlos/residual_inflation.hpp"
+
+namespace uwbnav {
+
+namespace {
+
+GatingPolicy policy_from_param(float value) {
+  const long v = std::lround(value);
+  if (v < 0 || v > static_cast<long>(GatingPolicy::kDefault)) return GatingPolicy::kDefault;
+  return static_cast<GatingPolicy>(v);
+}
+
+uint64_t us_from_param(float value) { return value > 0.0F ? static_cast<uint64_t>(value) : 0U; }
+
+float distance_m(const Vec3f& a, const Vec3f& b) {
+  const float dx = a.x - b.x;
+  const float dy = a.y - b.y;
+  const float dz = a.z - b.z;
+  return std::sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+// Innovation evidence of the default policy: logistic in the normalised
+// innovation, 0.5 at z0, clipped to [0.02, 0.98] so no single source is certain.
+float innovation_p_nlos(float z, float z0) {
+  if (!std::isfinite(z)) return kNaNf;
+  const float p = 1.0F / (1.0F + std::exp(-2.0F * (z - z0)));
+  return std::fmin(std::fmax(p, 0.02F), 0.98F);
+}
+
+}  // namespace
+
+GatingLayer::GatingLayer() = default;
+
+Status GatingLayer::configure(const SiteConfig& site, const Params& params) {
+  site_ = site;
+  update_params(params);
+  reset();
+  Status status = Status::kOk;
+  svm1_ = ok(svm_model_validate(kSvmModelRangeRate)) ? &kSvmModelRangeRate : nullptr;
+  svm2_ = ok(svm_model_validate(kSvmModelRangeRateSpeed)) ? &kSvmModelRangeRateSpeed : nullptr;
+  if (svm1_ == nullptr || svm2_ == nullptr) status = Status::kInvalidArgument;
+  configured_ = true;
+  return status;
+}
+
+void GatingLayer::update_params(const Params& params) {
+  policy_ = policy_from_param(params[ParamId::kGatePolicy]);
+  sigma_uwb_default_m_ = params[ParamId::kUwbSigma];
+  innov_gate_sigma_ = params[ParamId::kGateInnovSigma];
+  svm_model_ = static_cast<int>(std::lround(params[ParamId::kGateSvmModel]));
+  svm_threshold_ = params[ParamId::kGateSvmThreshold];
+  max_dt_us_ = us_from_param(params[ParamId::kGateMaxDtUs]);
+  ds_nlos_ = params[ParamId::kGateDsNlos];
+  ds_fuse_ = params[ParamId::kGateDsFuse];
+  epoch_us_ = us_from_param(params[ParamId::kGateEpochUs]);
+  resid_th_ = params[ParamId::kGateResidTh];
+  resid_beta_ = params[ParamId::kGateResidBeta];
+  const float pfa = params[ParamId::kGateRaimPfa];
+  const float pfa_local = params[ParamId::kGateRaimPfaLocal];
+  if (pfa != raim_pfa_ || pfa_local != raim_pfa_local_) {  // quantiles only when changed
+    raim_compute_thresholds(static_cast<double>(pfa), static_cast<double>(pfa_local), raim_thresholds_);
+    raim_pfa_ = pfa;
+    raim_pfa_local_ = pfa_local;
+  }
+  chan_lo_db_ = params[ParamId::kGateChanLoDb];
+  chan_hi_db_ = params[ParamId::kGateChanHiDb];
+  chan_p_max_ = params[ParamId::kGateChanPMax];
+  hyst_n_ = static_cast<uint16_t>(std::lround(params[ParamId::kGateHystN]));
+  escape_us_ = static_cast<uint64_t>(static_cast<double>(params[ParamId::kGateEscapeS]) * 1e6);
+  escape_r_scale_ = params[ParamId::kGateEscapeRScale];
+  default_nlos_ = params[ParamId::kGateDefaultNlos];
+  innov_z0_ = params[ParamId::kGateInnovZ0];
+}
+
+void GatingLayer::reset() {
+  for (Slot& s : slots_) s = Slot{};
+  now_us_ = 0;
+  last_fused_t_us_ = 0;
+  have_fused_ = false;
+  escape_active_ = false;
+}
+
+GatingAnchorStats GatingLayer::anchor_stats(size_t anchor_index) const {
+  GatingAnchorStats sum;
+  if (anchor_index >= kMaxAnchors) return sum;
+  uint64_t latest_t_us = 0;
+  for (size_t t = 0; t < kMaxTags; ++t) {
+    const Slot& s = slots_[anchor_index * kMaxTags + t];
+    sum.los_count += s.stats.los_count;
+    sum.nlos_count += s.stats.nlos_count;
+    sum.used_count += s.stats.used_count;
+    sum.held_count += s.stats.held_count;
+    sum.escape_count += s.stats.escape_count;
+    sum.nlos_state = sum.nlos_state || s.nlos_state;
+    if (s.has_last && s.last_t_us >= latest_t_us) {
+      latest_t_us = s.last_t_us;
+      sum.last_p_nlos = s.stats.last_p_nlos;
+    }
+  }
+  return sum;
+}
+
+int GatingLayer::slot_index(const RangeContext& ctx) const {
+  if (ctx.anchor_index < 0 || static_cast<size_t>(ctx.anchor_index) >= kMaxAnchors) return -1;
+  const int tag = site_.find_tag(ctx.range.tag_id);
+  const size_t tag_index = tag < 0 ? 0U : static_cast<size_t>(tag);
+  return static_cast<int>(static_cast<size_t>(ctx.anchor_index) * kMaxTags + tag_index);
+}
+
+float GatingLayer::sigma_uwb_m(const RangeContext& ctx) const {
+  if (std::isfinite(ctx.meas_var_m2) && ctx.meas_var_m2 > 0.0F) return std::sqrt(ctx.meas_var_m2);
+  return sigma_uwb_default_m_;
+}
+
+float GatingLayer::svm_p(const SvmModel* model, const Evidence& e, const RangeContext& ctx) const {
+  if (model == nullptr) return kNaNf;
+  float features[kSvmMaxFeatures] = {};
+  if (!svm_build_features(static_cast<SvmFeatureSet>(model->feature_set), e.range_rate_mps, ctx.speed_mps,
+                          ctx.range.fp_power_dbm, ctx.range.rx_power_dbm, features)) {
+    return kNaNf;
+  }
+  const Result<float> p = svm_nlos_probability(*model, features);
+  return p.ok() ? p.value() : kNaNf;
+}
+
+GatingLayer::Evidence GatingLayer::compute_evidence(const RangeContext& ctx, const Slot& slot) const {
+  Evidence e;
+  if (slot.has_prev && ctx.range.t_us > slot.prev_t_us && ctx.range.t_us - slot.prev_t_us <= max_dt_us_) {
+    const float dt_s = static_cast<float>(static_cast<double>(ctx.range.t_us - slot.prev_t_us) * 1e-6);
+    e.delta_range_m = ctx.range.range_m - slot.prev_range_m;  // Δρ_k (eq. 3)
+    e.range_rate_mps = e.delta_range_m / dt_s;                // v_uk (eq. 1)
+  }
+  e.p_svm2 = svm_p(svm2_, e, ctx);
+  e.p_svm = svm_model_ == 1 ? svm_p(svm1_, e, ctx) : e.p_svm2;
+  e.p_mc = consistency_p_nlos(e.delta_range_m, ctx.dist_since_prev_m, sigma_uwb_m(ctx));
+  e.p_chan = channel_p_nlos(ctx.range.fp_power_dbm, ctx.range.rx_power_dbm, chan_lo_db_, chan_hi_db_, chan_p_max_);
+  if (ctx.filter_ready && ctx.innovation_var_m2 > 0.0F) {
+    e.z = std::fabs(ctx.innovation_m) / std::sqrt(ctx.innovation_var_m2);
+  }
+  return e;
+}
+
+GatingDecision GatingLayer::decide_innovation(const RangeContext& ctx, const Evidence& e) const {
+  GatingDecision d;
+  if (!ctx.filter_ready) return d;  // no prediction to test against
+  // Chi-square gate in sigmas: innov^2 / (gate^2 S) > 1 rejects; non-finite rejects.
+  const float ratio = (ctx.innovation_m * ctx.innovation_m) /
+                      (innov_gate_sigma_ * innov_gate_sigma_ * ctx.innovation_var_m2);
+  if (!std::isfinite(ratio) || !(ctx.innovation_var_m2 > 0.0F) || ratio > 1.0F) {
+    d.use = false;
+    d.nlos = true;
+  }
+  (void)e;
+  return d;
+}
+
+GatingDecision GatingLayer::decide_svm(const Evidence& e) const {
+  GatingDecision d;
+  d.p_fused = e.p_svm;
+  d.nlos = e.p_svm > svm_threshold_;  // NaN (no previous range) -> LOS
+  d.use = !d.nlos;
+  return d;
+}
+
+GatingDecision GatingLayer::decide_consistency(const Evidence& e) const {
+  GatingDecision d;
+  d.p_fused = e.p_mc;
+  d.nlos = e.p_mc > 0.5F;  // eq. 5: excess above σ_UWB
+  d.use = !d.nlos;
+  return d;
+}
+
+GatingDecision GatingLayer::decide_dempster_shafer(const RangeContext& ctx, const Evidence& e, int slot) const {
+  GatingDecision d;
+  const float r = ds_combine(e.p_svm, e.p_mc);  // eq. 7-8
+  d.p_fused = r;
+  d.nlos = r > ds_nlos_;
+  // Seed 000 §1.3 over the epoch (latest range of each pair within epoch_us, this one included):
+  // all LOS -> fuse; NLOS fewer than half -> fuse ranges whose R is below ds_fuse; otherwise drop.
+  size_t n = 1;
+  size_t n_nlos = d.nlos ? 1U : 0U;
+  for (size_t i = 0; i < kSlots; ++i) {
+    const Slot& s = slots_[i];
+    if (static_cast<int>(i) == slot || !s.has_last || ctx.range.t_us - s.last_t_us > epoch_us_) continue;
+    ++n;
+    if (s.last_nlos) ++n_nlos;
+  }
+  if (n_nlos == 0) {
+    d.use = true;
+  } else {
+    d.use = 2 * n_nlos < n && r < ds_fuse_;
+  }
+  return d;
+}
+
+GatingDecision GatingLayer::decide_residual(const RangeContext& ctx, const Evidence& e) const {
+  GatingDecision d;
+  if (!ctx.filter_ready) return d;
+  // Seed 003 eq. 21-23 on the normalised residual; applied as R' = e R.
+  const float factor = residual_inflation_factor(e.z, resid_th_, resid_beta_);
+  if (!std::isfinite(factor)) {
+    d.use = false;
+    d.nlos = true;
+    return d;
+  }
+  d.nlos = factor > 1.0F;
+  d.r_scale = factor;
+  return d;
+}
+
+GatingDecision GatingLayer::decide_raim(const RangeContext& ctx, int slot) const {
+  GatingDecision d;
+  // Epoch of this tag: the latest range of each anchor within epoch_us. With a
+  // converged filter each older range is moved to this range's time with the
+  // filter's own displacement (short-term INS motion is accurate even when the
+  // absolute position is not); otherwise it is taken as measured.
+  LsRange ranges[kRaimMaxRanges];
+  size_t n = 0;
+  size_t self = 0;
+  const size_t tag_index = static_cast<size_t>(slot) % kMaxTags;
+  const float sigma_m = sigma_uwb_m(ctx);
+  for (size_t a = 0; a < site_.num_anchors && a < kMaxAnchors && n < kRaimMaxRanges; ++a) {
+    const int i = static_cast<int>(a * kMaxTags + tag_index);
+    const Slot& s = slots_[i];
+    LsRange r;
+    r.anchor_pos_nav_m = site_.anchors[a].pos_nav_m;
+    r.sigma_m = sigma_m;
+    if (i == slot) {
+      r.range_m = ctx.range.range_m;
+      self = n;
+    } else {
+      if (!s.has_last || ctx.range.t_us - s.last_t_us > epoch_us_) continue;
+      r.range_m = s.last_range_m;
+      if (ctx.filter_ready && s.last_filter_ready) {
+        r.range_m += distance_m(r.anchor_pos_nav_m, ctx.tag_pos_nav_m) -
+                     distance_m(r.anchor_pos_nav_m, s.last_tag_pos_nav_m);
+      }
+    }
+    ranges[n++] = r;
+  }
+  LsOptions opt;
+  opt.two_d = ctx.filter_ready && site_.platform == Platform::kGround;
+  opt.known_z_m = ctx.tag_pos_nav_m.z;
+  opt.has_initial_guess = ctx.filter_ready;
+  opt.initial_guess_nav_m = ctx.tag_pos_nav_m;
+  RaimResult result;
+  if (!ok(raim_run(ranges, n, opt, raim_thresholds_, result))) return d;
+  d.nlos = result.excluded[self];
+  d.use = !d.nlos;
+  return d;
+}
+
+GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Evidence& e, Slot& slot) {
+  GatingDecision d;
+  const float p_innov = innovation_p_nlos(e.z, innov_z0_);
+  const float evidence[4] = {e.p_svm2, e.p_mc, e.p_chan, p_innov};
+  const float r = ds_combine_all(evidence, 4);
+  d.p_fused = r;
+  d.nlos = r > default_nlos_;
+  // A gross outlier against a converged filter is rejected whatever the other evidence says.
+  if (std::isfinite(e.z) && e.z > innov_gate_sigma_) d.nlos = true;
+  if (ctx.filter_ready && !std::isfinite(e.z)) d.nlos = true;
+  d.use = !d.nlos;
+  // Per-pair hysteresis: an NLOS pair needs hyst_n consecutive LOS ranges to be fused again.
+  if (d.nlos) {
+    slot.nlos_state = hyst_n_ > 0;
+    slot.los_streak = 0;
+  } else if (slot.nlos_state) {
+    ++slot.los_streak;
+    if (slot.los_streak >= hyst_n_) {
+      slot.nlos_state = false;
+    } else {
+      d.use = false;
+      ++slot.stats.held_count;
+    }
+  }
+  // Seed 003 inflation for accepted ranges with a large normalised residual.
+  if (d.use) {
+    const float factor = residual_inflation_factor(e.z, resid_th_, resid_beta_);
+    if (std::isfinite(factor)) d.r_scale = factor;
+  }
+  // Escape: nothing fused for escape_s while ranges keep arriving means the filter may have
+  // drifted away from its own gate. Admit ranges the filter-independent evidence calls LOS,
+  // with R inflated so that the consistent majority pulls the filter back gently.
+  if (ctx.filter_ready && escape_us_ > 0) {
+    if (!have_fused_) {
+      have_fused_ = true;
+      last_fused_t_us_ = ctx.range.t_us;
+    }
+    if (!escape_active_ && ctx.range.t_us - last_fused_t_us_ > escape_us_) {
+      escape_active_ = true;
+      ++escape_entries_;
+    }
+    if (escape_active_ && !d.use) {
+      const float independent[3] = {e.p_svm2, e.p_mc, e.p_chan};
+      const float r_ind = ds_combine_all(independent, 3);
+      if (!(r_ind > default_nlos_) && std::isfinite(ctx.range.range_m)) {
+        d.use = true;
+        d.r_scale = escape_r_scale_;
+        ++slot.stats.escape_count;
+      }
+    }
+  }
+  return d;
+}
+
+GatingDecision GatingLayer::assess(const RangeContext& ctx) {
+  GatingDecision d;
+  if (!configured_) return d;
+  const int si = slot_index(ctx);
+  if (si < 0 || !std::isfinite(ctx.range.range_m)) {
+    d.use = false;
+    d.nlos = true;
+    return d;
+  }
+  Slot& slot = slots_[si];
+  now_us_ = ctx.range.t_us;
+  const Evidence e = compute_evidence(ctx, slot);
+
+  switch (policy_) {
+    case GatingPolicy::kNone: break;
+    case GatingPolicy::kInnovation: d = decide_innovation(ctx, e); break;
+    case GatingPolicy::kSvm: d = decide_svm(e); break;
+    case GatingPolicy::kConsistency: d = decide_consistency(e); break;
+    case GatingPolicy::kDempsterShafer: d = decide_dempster_shafer(ctx, e, si); break;
+    case GatingPolicy::kResidualInflation: d = decide_residual(ctx, e); break;
+    case GatingPolicy::kRaim: d = decide_raim(ctx, si); break;
+    case GatingPolicy::kDefault: d = decide_default(ctx, e, slot); break;
+  }
+  d.p_svm = e.p_svm;
+  d.p_mc = e.p_mc;
+
+  // This range becomes the pair's previous range (eq. 1/3) and its epoch entry.
+  slot.has_prev = true;
+  slot.prev_t_us = ctx.range.t_us;
+  slot.prev_range_m = ctx.range.range_m;
+  slot.has_last = true;
+  slot.last_t_us = ctx.range.t_us;
+  slot.last_range_m = ctx.range.range_m;
+  slot.last_tag_pos_nav_m = ctx.tag_pos_nav_m;
+  slot.last_filter_ready = ctx.filter_ready;
+  slot.last_nlos = d.nlos;
+  if (d.nlos) {
+    ++slot.stats.nlos_count;
+  } else {
+    ++slot.stats.los_count;
+  }
+  slot.stats.last_p_nlos = d.p_fused;
+  return d;
+}
+
+void GatingLayer::on_result(const RangeContext& ctx, const GatingDecision& d, bool fused) {
+  if (!fused) return;
+  const int si = slot_index(ctx);
+  if (si >= 0) ++slots_[si].stats.used_count;
+  have_fused_ = true;
+  last_fused_t_us_ = ctx.range.t_us;
+  // A range fused without the escape inflation means the filter accepts ranges again.
+  if (escape_active_ && d.r_scale < escape_r_scale_) escape_active_ = false;
+}
+
+}  // namespace uwbnav

@@ -1,0 +1,141 @@
+// The NLOS gating layer the Navigator owns: per-range evidence from the
+// methods of estimator/nlos/ (SVM p1, consistency p2, Dempster-Shafer R,
+// residual inflation, RAIM, innovation gate, channel diagnostics) and the
+// selected policy's decision (GatingPolicy, docs/nlos.md). Per anchor/tag
+// pair state for eq. 1/3 differences, epochs, hysteresis and counters; an
+// escape for a filter locked out by its own gate. Static memory only;
+// bounded cost per range (RAIM: at most kRaimMaxRanges LS solves).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "estimator/gating.hpp"
+#include "estimator/nlos/raim.hpp"
+#include "estimator/nlos/svm_model.hpp"
+#include "estimator/params.hpp"
+#include "estimator/status.hpp"
+#include "estimator/types.hpp"
+
+namespace uwbnav {
+
+// Per-anchor counters and state (summed over tags) for diagnostics.
+struct GatingAnchorStats {
+  uint32_t los_count = 0;       // ranges classified LOS
+  uint32_t nlos_count = 0;      // ranges classified NLOS
+  uint32_t used_count = 0;      // ranges the Navigator fused
+  uint32_t held_count = 0;      // LOS ranges held back by hysteresis
+  uint32_t escape_count = 0;    // ranges admitted by the escape
+  bool nlos_state = false;      // hysteretic NLOS state (any tag of this anchor)
+  float last_p_nlos = kNaNf;    // last fused NLOS probability
+};
+
+class GatingLayer {
+ public:
+  GatingLayer();
+
+  // Loads the site (anchor/tag tables) and the parameters, verifies the SVM
+  // models (CRC); clears all state. kInvalidArgument when a model is corrupt
+  // (the layer still works: SVM evidence is then absent).
+  [[nodiscard]] Status configure(const SiteConfig& site, const Params& params);
+  // Applies changed parameter values live; keeps per-anchor state.
+  void update_params(const Params& params);
+  // Clears per-anchor state (hysteresis, previous ranges, epochs, escape).
+  void reset();
+
+  // Verdict on one range, before the filter update. Never touches the filter.
+  // Ranges must come in non-decreasing time (as the Navigator guarantees).
+  GatingDecision assess(const RangeContext& ctx);
+  // Feedback after the update: `fused` says whether the Navigator fused it.
+  void on_result(const RangeContext& ctx, const GatingDecision& d, bool fused);
+
+  GatingPolicy policy() const { return policy_; }
+  bool escape_active() const { return escape_active_; }
+  uint32_t escape_entries() const { return escape_entries_; }
+  // Counters of anchor `anchor_index` (index into SiteConfig::anchors).
+  GatingAnchorStats anchor_stats(size_t anchor_index) const;
+
+ private:
+  static constexpr size_t kSlots = kMaxAnchors * kMaxTags;
+
+  // Per anchor/tag pair.
+  struct Slot {
+    bool has_prev = false;
+    uint64_t prev_t_us = 0;
+    float prev_range_m = 0.0F;
+    // Latest range of the pair, for epochs (D-S dynamic policy, RAIM).
+    bool has_last = false;
+    uint64_t last_t_us = 0;
+    float last_range_m = 0.0F;
+    Vec3f last_tag_pos_nav_m;
+    bool last_filter_ready = false;
+    bool last_nlos = false;
+    // Hysteresis (default policy).
+    bool nlos_state = false;
+    uint16_t los_streak = 0;
+    GatingAnchorStats stats;
+  };
+
+  // Evidence of one range, computed once and shared by the policies.
+  struct Evidence {
+    float range_rate_mps = kNaNf;  // v_uk, eq. 1
+    float delta_range_m = kNaNf;   // Δρ_k, eq. 3
+    float p_svm = kNaNf;           // p1 of the selected model
+    float p_svm2 = kNaNf;          // p1 of SVM2 (default policy)
+    float p_mc = kNaNf;            // p2, eq. 6
+    float p_chan = kNaNf;          // channel evidence
+    float z = kNaNf;               // |innovation| / sqrt(S) [-]
+  };
+
+  int slot_index(const RangeContext& ctx) const;
+  float sigma_uwb_m(const RangeContext& ctx) const;
+  Evidence compute_evidence(const RangeContext& ctx, const Slot& slot) const;
+  float svm_p(const SvmModel* model, const Evidence& e, const RangeContext& ctx) const;
+
+  GatingDecision decide_innovation(const RangeContext& ctx, const Evidence& e) const;
+  GatingDecision decide_svm(const Evidence& e) const;
+  GatingDecision decide_consistency(const Evidence& e) const;
+  GatingDecision decide_dempster_shafer(const RangeContext& ctx, const Evidence& e, int slot) const;
+  GatingDecision decide_residual(const RangeContext& ctx, const Evidence& e) const;
+  GatingDecision decide_raim(const RangeContext& ctx, int slot) const;
+  GatingDecision decide_default(const RangeContext& ctx, const Evidence& e, Slot& slot);
+
+  SiteConfig site_;
+  bool configured_ = false;
+  const SvmModel* svm1_ = nullptr;  // validated models, nullptr when corrupt
+  const SvmModel* svm2_ = nullptr;
+  Slot slots_[kSlots];
+
+  // Parameters.
+  GatingPolicy policy_ = GatingPolicy::kDefault;
+  float sigma_uwb_default_m_ = 0.1F;
+  float innov_gate_sigma_ = 5.0F;
+  int svm_model_ = 2;
+  float svm_threshold_ = 0.5F;
+  uint64_t max_dt_us_ = 500000;
+  float ds_nlos_ = 0.8F;
+  float ds_fuse_ = 0.7F;
+  uint64_t epoch_us_ = 150000;
+  float resid_th_ = 3.0F;
+  float resid_beta_ = 2.0F;
+  RaimThresholds raim_thresholds_;
+  float raim_pfa_ = -1.0F;
+  float raim_pfa_local_ = -1.0F;
+  float chan_lo_db_ = 6.0F;
+  float chan_hi_db_ = 10.0F;
+  float chan_p_max_ = 0.9F;
+  uint16_t hyst_n_ = 2;
+  uint64_t escape_us_ = 2000000;
+  float escape_r_scale_ = 100.0F;
+  float default_nlos_ = 0.5F;
+  float innov_z0_ = 3.0F;
+
+  // Escape state (default policy).
+  uint64_t now_us_ = 0;
+  uint64_t last_fused_t_us_ = 0;
+  bool have_fused_ = false;
+  bool escape_active_ = false;
+  uint32_t escape_entries_ = 0;
+};
+
+}  // namespace uwbnav

@@ -1,0 +1,75 @@
+// Sliding-window rest detector (accelerometer magnitude spread, gyro magnitude).
+#include "estimator/rest_detector.hpp"
+
+#include <cmath>
+
+namespace uwbnav {
+
+void RestDetector::configure(Real window_s, Real accel_std_max_mps2, Real gyro_max_radps) {
+  window_s_ = window_s;
+  accel_std_max_ = accel_std_max_mps2;
+  gyro_max_ = gyro_max_radps;
+  reset();
+}
+
+void RestDetector::reset() {
+  head_ = 0;
+  count_ = 0;
+  accel_mean_.setZero();
+  gyro_mean_.setZero();
+  span_s_ = Real(0);
+  full_ = false;
+  at_rest_ = false;
+}
+
+void RestDetector::add(uint64_t t_us, const Vec3& accel_body_mps2, const Vec3& gyro_body_radps) {
+  accel_[head_] = accel_body_mps2;
+  gyro_[head_] = gyro_body_radps;
+  t_us_[head_] = t_us;
+  head_ = (head_ + 1) % kCapacity;
+  if (count_ < kCapacity) ++count_;
+}
+
+void RestDetector::evaluate() {
+  const size_t newest = (head_ + kCapacity - 1) % kCapacity;
+  const uint64_t t_end = t_us_[newest];
+  const uint64_t window_us = static_cast<uint64_t>(window_s_ * Real(1e6));
+  Vec3 a_sum = Vec3::Zero();
+  Vec3 g_sum = Vec3::Zero();
+  Real n_sum = Real(0);
+  Real g_max = Real(0);
+  size_t n = 0;
+  uint64_t t_first = t_end;
+  for (size_t k = 0; k < count_; ++k) {
+    const size_t i = (newest + kCapacity - k) % kCapacity;
+    if (t_end - t_us_[i] > window_us) break;
+    const Real an = accel_[i].norm();
+    a_sum += accel_[i];
+    g_sum += gyro_[i];
+    n_sum += an;
+    g_max = std::fmax(g_max, gyro_[i].norm());
+    t_first = t_us_[i];
+    ++n;
+  }
+  span_s_ = static_cast<Real>(t_end - t_first) * Real(1e-6);
+  // A window is judged once it spans 80 % of its length (IMU gaps shorten it).
+  full_ = n >= 5 && span_s_ >= Real(0.8) * window_s_;
+  if (n == 0 || count_ == 0) {
+    at_rest_ = false;
+    return;
+  }
+  const Real inv_n = Real(1) / static_cast<Real>(n);
+  accel_mean_ = a_sum * inv_n;
+  gyro_mean_ = g_sum * inv_n;
+  const Real mean = n_sum * inv_n;
+  Real var = Real(0);  // second pass: no cancellation around |a| ~ 9.8
+  for (size_t k = 0; k < n; ++k) {
+    const size_t i = (newest + kCapacity - k) % kCapacity;
+    const Real d = accel_[i].norm() - mean;
+    var += d * d;
+  }
+  var *= inv_n;
+  at_rest_ = full_ && std::sqrt(var) < accel_std_max_ && g_max < gyro_max_;
+}
+
+}  // namespace uwbnav

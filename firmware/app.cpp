@@ -1,0 +1,139 @@
+// The 100 Hz application cycle (see app.hpp).
+#include "firmware/app.hpp"
+
+#include "firmware/param_blob.hpp"
+
+namespace uwbnav {
+
+App::App(hal::Board& board) : board_(board) {}
+
+Status App::init() {
+  params_.reset_all();
+  if (board_.site.uwb_sigma_m > 0.0F) ignore_status(params_.set(ParamId::kUwbSigma, board_.site.uwb_sigma_m));
+  ignore_status(load_params());  // empty or corrupt store: defaults stay
+  validator_.configure(board_.site, params_);
+  const Status s = nav_.configure(board_.site, params_);
+  initialised_ = ok(s);
+  return s;
+}
+
+Status App::set_param(ParamId id, float value) {
+  const Status s = params_.set(id, value);
+  if (ok(s)) apply_params(params_);
+  return s;
+}
+
+void App::apply_params(const Params& params) {
+  params_ = params;
+  validator_.update_params(params_);
+  nav_.update_params(params_);
+}
+
+Status App::save_params() {
+  uint8_t blob[kParamBlobMaxBytes];
+  const size_t n = param_blob_write(params_, blob, sizeof blob);
+  if (n == 0) return Status::kFull;
+  return board_.params.save(blob, n);
+}
+
+Status App::load_params() {
+  uint8_t blob[kParamBlobMaxBytes];
+  size_t n = 0;
+  const Status s = board_.params.load(blob, sizeof blob, &n);
+  if (!ok(s)) return s;
+  Params loaded = params_;
+  const Status r = param_blob_read(blob, n, loaded, nullptr);
+  if (!ok(r)) return r;
+  apply_params(loaded);
+  return Status::kOk;
+}
+
+void App::reset_filter() {
+  nav_.reset();
+  validator_.reset_history();
+}
+
+void App::reset_stats() { stats_ = AppStats{}; }
+
+void App::record_cycle_timing(uint32_t work_us, uint32_t jitter_us, bool overrun) {
+  LoopStats& l = stats_.loop;
+  if (l.cycles == 0 || work_us < l.cycle_min_us) l.cycle_min_us = work_us;
+  if (work_us > l.cycle_max_us) l.cycle_max_us = work_us;
+  if (jitter_us > l.jitter_max_us) l.jitter_max_us = jitter_us;
+  l.cycle_sum_us += work_us;
+  ++l.cycles;
+  if (overrun) ++l.overruns;
+}
+
+void App::drain_sensors(uint64_t now_us) {
+  imu_count_ = 0;
+  uwb_count_ = 0;
+  ImuSample imu;
+  while (imu_count_ < kMaxImuPerCycle) {
+    const Status s = board_.imu.poll(now_us, imu);
+    if (s == Status::kIoError) {
+      ++stats_.imu.io_errors;
+      break;
+    }
+    if (!ok(s)) break;
+    ++stats_.imu.received;
+    const Verdict v = validator_.check_imu(imu, now_us);
+    if (!v.accepted) {
+      ++stats_.imu.rejected[static_cast<size_t>(v.reason)];
+      continue;
+    }
+    ++stats_.imu.accepted;
+    imu_buf_[imu_count_++] = imu;
+  }
+  UwbRange r;
+  while (uwb_count_ < kMaxUwbPerCycle) {
+    const Status s = board_.uwb.poll(now_us, r);
+    if (s == Status::kIoError) {
+      ++stats_.uwb.io_errors;
+      break;
+    }
+    if (!ok(s)) break;
+    ++stats_.uwb.received;
+    const Verdict v = validator_.check_uwb(r, now_us);
+    if (!v.accepted) {
+      ++stats_.uwb.rejected[static_cast<size_t>(v.reason)];
+      continue;
+    }
+    ++stats_.uwb.accepted;
+    uwb_buf_[uwb_count_++] = r;
+  }
+}
+
+void App::handle_range(const UwbRange& r) {
+  const RangeReport rep = nav_.on_range(r);
+  if (observer_ != nullptr) observer_->on_range(rep);
+}
+
+// Both buffers are each in time order (validation rejects out-of-order frames):
+// merge them so the estimator sees one non-decreasing time line. On equal
+// stamps the IMU sample goes first (propagate, then update).
+void App::process_in_time_order() {
+  size_t i = 0;
+  size_t u = 0;
+  while (i < imu_count_ || u < uwb_count_) {
+    const bool take_imu = u >= uwb_count_ || (i < imu_count_ && imu_buf_[i].t_us <= uwb_buf_[u].t_us);
+    if (take_imu) {
+      ignore_status(nav_.on_imu(imu_buf_[i++]));
+    } else {
+      handle_range(uwb_buf_[u++]);
+    }
+  }
+}
+
+void App::tick(uint64_t now_us) {
+  last_tick_us_ = now_us;
+  if (initialised_) {
+    drain_sensors(now_us);
+    process_in_time_order();
+    last_output_ = nav_.output(now_us);
+    if (observer_ != nullptr) observer_->on_output(last_output_);
+  }
+  console_.poll(now_us);
+}
+
+}  // namespace uwbnav

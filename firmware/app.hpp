@@ -1,0 +1,87 @@
+// The uwbnav application: one 10 ms cycle (`tick`) drains the IMU and UWB
+// frames due, validates them, runs the estimator in sensor-time order, emits
+// CAN and services the console. Static memory only; one instance per board.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "estimator/navigator.hpp"
+#include "estimator/params.hpp"
+#include "firmware/app_stats.hpp"
+#include "firmware/console/console.hpp"
+#include "firmware/input_validator.hpp"
+#include "hal/hal.hpp"
+
+namespace uwbnav {
+
+constexpr uint32_t kCyclePeriodUs = 10000;  // 100 Hz loop
+constexpr size_t kMaxImuPerCycle = 32;      // frames drained per cycle; more wait for the next cycle
+constexpr size_t kMaxUwbPerCycle = 32;
+
+// Host-side tap on what the firmware computed (replay writers, tests, HIL).
+// The firmware calls it synchronously; implementations must not block.
+class AppObserver {
+ public:
+  virtual ~AppObserver() = default;
+  virtual void on_range(const RangeReport& report) = 0;
+  virtual void on_output(const NavOutput& output) = 0;
+};
+
+class App {
+ public:
+  explicit App(hal::Board& board);
+
+  // Loads parameters from the store (defaults when empty/corrupt), configures
+  // the estimator with the board's site. Call once before the first tick.
+  [[nodiscard]] Status init();
+
+  // One cycle at loop time now_us (the cycle's deadline on the loop's grid).
+  void tick(uint64_t now_us);
+
+  // Loop drivers report each cycle's work time and start jitter here.
+  void record_cycle_timing(uint32_t work_us, uint32_t jitter_us, bool overrun);
+
+  void set_observer(AppObserver* observer) { observer_ = observer; }
+
+  // Parameter access for the console and tools; changes apply live.
+  const Params& params() const { return params_; }
+  [[nodiscard]] Status set_param(ParamId id, float value);
+  void apply_params(const Params& params);
+  [[nodiscard]] Status save_params();
+  [[nodiscard]] Status load_params();
+
+  void reset_filter();
+  void reset_stats();
+
+  const AppStats& stats() const { return stats_; }
+  const Navigator& navigator() const { return nav_; }
+  const NavOutput& last_output() const { return last_output_; }
+  uint64_t last_tick_us() const { return last_tick_us_; }
+  hal::Board& board() { return board_; }
+  Console& console() { return console_; }
+
+ private:
+  void drain_sensors(uint64_t now_us);
+  void process_in_time_order();
+  void handle_range(const UwbRange& r);
+
+  hal::Board& board_;
+  Params params_;
+  Navigator nav_;
+  InputValidator validator_;
+  AppStats stats_;
+  AppObserver* observer_ = nullptr;
+  NavOutput last_output_;
+  uint64_t last_tick_us_ = 0;
+  bool initialised_ = false;
+  Console console_{*this};  // serial shell; polled at the end of every tick
+
+  // Per-cycle staging, sorted by sensor time before reaching the estimator.
+  ImuSample imu_buf_[kMaxImuPerCycle];
+  size_t imu_count_ = 0;
+  UwbRange uwb_buf_[kMaxUwbPerCycle];
+  size_t uwb_count_ = 0;
+};
+
+}  // namespace uwbnav

@@ -1,0 +1,133 @@
+// CanPublisher: periodic, E2E-protected, non-blocking transmission of the navigation output.
+#include "firmware/can/publisher.hpp"
+
+#include <cmath>
+
+#include "firmware/can/e2e.hpp"
+
+namespace uwbnav::can {
+namespace {
+
+uint32_t period_us_from_ms(float ms) {
+  const long ticks = std::lround(static_cast<double>(ms) / 10.0);
+  return static_cast<uint32_t>(ticks < 1 ? 1 : ticks) * kCanTickUs;
+}
+
+}  // namespace
+
+void CanDiag::set_anchor_nlos(int anchor_index, bool nlos) {
+  if (anchor_index < 0 || anchor_index >= 16) return;
+  const auto bit = static_cast<uint16_t>(1U << static_cast<unsigned>(anchor_index));
+  nlos_mask = nlos ? static_cast<uint16_t>(nlos_mask | bit) : static_cast<uint16_t>(nlos_mask & ~bit);
+}
+
+void CanDiag::set_from_stats(const AppStats& stats) {
+  loop_overruns = stats.loop.overruns;
+  input_rejects = stats.imu.rejected_total() + stats.uwb.rejected_total() + stats.can_rx.rejected_total();
+}
+
+PosXYMsg pos_xy_from(const NavOutput& nav) {
+  PosXYMsg m;
+  m.status = nav.status;
+  m.x_nav_m = nav.pos_nav_m.x;
+  m.y_nav_m = nav.pos_nav_m.y;
+  return m;
+}
+
+PosZMsg pos_z_from(const NavOutput& nav) {
+  PosZMsg m;
+  m.status = nav.status;
+  m.z_nav_m = nav.pos_nav_m.z;
+  m.vz_nav_mps = nav.vel_nav_mps.z;
+  m.ranges_used = nav.ranges_used;
+  m.ranges_rejected = nav.ranges_rejected;
+  return m;
+}
+
+VelHdgMsg vel_hdg_from(const NavOutput& nav) {
+  VelHdgMsg m;
+  m.vx_nav_mps = nav.vel_nav_mps.x;
+  m.vy_nav_mps = nav.vel_nav_mps.y;
+  m.heading_rad = nav.heading_rad;
+  return m;
+}
+
+AccuracyMsg accuracy_from(const NavOutput& nav) {
+  AccuracyMsg m;
+  m.sigma_x_m = nav.pos_sigma_m.x;
+  m.sigma_y_m = nav.pos_sigma_m.y;
+  m.sigma_z_m = nav.pos_sigma_m.z;
+  m.corr_xy = nav.pos_xy_corr;
+  return m;
+}
+
+DiagMsg diag_from(const CanDiag& diag) {
+  DiagMsg m;
+  m.nlos_mask = diag.nlos_mask;
+  m.resets = diag.resets;
+  m.overruns = diag.loop_overruns;
+  m.input_rejects = diag.input_rejects;
+  return m;
+}
+
+void CanPublisher::configure(const Params& params) {
+  enabled_ = params[ParamId::kCanTxEnable] >= 0.5F;
+  pos_.period_us = period_us_from_ms(params[ParamId::kCanPosPeriodMs]);
+  accuracy_.period_us = period_us_from_ms(params[ParamId::kCanAccPeriodMs]);
+  diag_.period_us = period_us_from_ms(params[ParamId::kCanDiagPeriodMs]);
+  pos_.started = accuracy_.started = diag_.started = false;
+}
+
+bool CanPublisher::due(Schedule& s, uint64_t t_us) {
+  // Half a tick of tolerance absorbs loop jitter; a clock that jumped back by
+  // more than a period or a loop that fell behind restarts the schedule at t_us
+  // instead of bursting the missed frames.
+  if (!s.started || s.next_due_us > t_us + s.period_us) {
+    s.started = true;
+    s.next_due_us = t_us + s.period_us;
+    return true;
+  }
+  if (t_us + kCanTickUs / 2 < s.next_due_us) return false;
+  s.next_due_us += s.period_us;
+  if (s.next_due_us <= t_us) s.next_due_us = t_us + s.period_us;
+  return true;
+}
+
+void CanPublisher::send(Slot slot, hal::CanFrame& frame, bool saturated, hal::CanBus& bus) {
+  counters_[slot] = next_alive_counter(counters_[slot]);
+  const Status s = bus.send(frame);
+  if (s == Status::kOk) {
+    ++stats_.sent;
+    if (saturated) ++stats_.saturated;
+  } else if (s == Status::kWouldBlock) {
+    ++stats_.dropped;
+  } else {
+    ++stats_.failed;
+  }
+}
+
+void CanPublisher::on_cycle(uint64_t t_us, const NavOutput& nav, const CanDiag& diag, hal::CanBus& bus) {
+  if (!enabled_) return;
+  hal::CanFrame f;
+  f.t_us = t_us;
+  if (due(pos_, t_us)) {
+    bool sat = encode(NavTimeMsg{nav.t_us}, counters_[kNavTime], f);
+    send(kNavTime, f, sat, bus);
+    sat = encode(pos_xy_from(nav), counters_[kPosXY], f);
+    send(kPosXY, f, sat, bus);
+    sat = encode(pos_z_from(nav), counters_[kPosZ], f);
+    send(kPosZ, f, sat, bus);
+    sat = encode(vel_hdg_from(nav), counters_[kVelHdg], f);
+    send(kVelHdg, f, sat, bus);
+  }
+  if (due(accuracy_, t_us)) {
+    const bool sat = encode(accuracy_from(nav), counters_[kAccuracy], f);
+    send(kAccuracy, f, sat, bus);
+  }
+  if (due(diag_, t_us)) {
+    const bool sat = encode(diag_from(diag), counters_[kDiag], f);
+    send(kDiag, f, sat, bus);
+  }
+}
+
+}  // namespace uwbnav::can

@@ -1,0 +1,172 @@
+// HIL sensor frames: rig-side encoding and firmware-side E2E-checked decoding.
+#include "firmware/can/sensor_decoder.hpp"
+
+namespace uwbnav::can {
+namespace {
+
+constexpr uint32_t kInputIds[] = {id_of(MsgId::kHilImuTime), id_of(MsgId::kHilImuAccel),
+                                  id_of(MsgId::kHilImuGyro), id_of(MsgId::kHilUwbRange),
+                                  id_of(MsgId::kHilUwbTime)};
+constexpr uint8_t kImuAll = 0x7;
+constexpr uint8_t kUwbAll = 0x3;
+
+}  // namespace
+
+uint64_t unwrap_time_us(uint32_t t32_us, uint64_t ref_us) {
+  const auto delta = static_cast<int32_t>(t32_us - static_cast<uint32_t>(ref_us));
+  if (delta < 0 && static_cast<uint64_t>(-static_cast<int64_t>(delta)) > ref_us) return t32_us;
+  return static_cast<uint64_t>(static_cast<int64_t>(ref_us) + delta);
+}
+
+bool CanSensorEncoder::encode_imu(const ImuSample& s, hal::CanFrame (&out)[kImuFrames]) {
+  bool sat = encode(HilImuTimeMsg{static_cast<uint32_t>(s.t_us)}, imu_counter_, out[0]);
+  sat = encode(HilImuAccelMsg{s.accel_body_mps2}, imu_counter_, out[1]) || sat;
+  sat = encode(HilImuGyroMsg{s.gyro_body_radps}, imu_counter_, out[2]) || sat;
+  for (auto& f : out) f.t_us = s.t_us;
+  imu_counter_ = next_alive_counter(imu_counter_);
+  return sat;
+}
+
+bool CanSensorEncoder::encode_uwb(const UwbRange& r, hal::CanFrame (&out)[kUwbFrames]) {
+  HilUwbRangeMsg range;
+  range.anchor_id = r.anchor_id;
+  range.tag_id = r.tag_id;
+  range.range_m = r.range_m;
+  HilUwbTimeMsg time;
+  time.t_sensor_us = static_cast<uint32_t>(r.t_us);
+  time.fp_power_dbm = r.fp_power_dbm;
+  time.rx_power_dbm = r.rx_power_dbm;
+  bool sat = encode(range, uwb_counter_, out[0]);
+  sat = encode(time, uwb_counter_, out[1]) || sat;
+  for (auto& f : out) f.t_us = r.t_us;
+  uwb_counter_ = next_alive_counter(uwb_counter_);
+  return sat;
+}
+
+void CanSensorDecoder::configure(const Params& params) {
+  const auto max_delta = static_cast<uint8_t>(params[ParamId::kCanE2eMaxDelta]);
+  for (auto& r : rx_) r.set_max_delta(max_delta);
+}
+
+void CanSensorDecoder::reset() {
+  for (auto& r : rx_) r.reset();
+  imu_ = ImuGroup{};
+  uwb_ = UwbGroup{};
+  stats_ = CanSensorStats{};
+}
+
+Status CanSensorDecoder::check(size_t input, const MessageDef& m, const hal::CanFrame& f) {
+  ++stats_.frames;
+  if ((f.flags & (hal::CanFrame::kFlagExtended | hal::CanFrame::kFlagError)) != 0) {
+    ++stats_.length_errors;
+    return Status::kRejected;
+  }
+  E2eReceiver& rx = rx_[input];
+  const uint8_t before = rx.last_counter();
+  const E2eVerdict v = rx.check(m.data_id, f.data, f.len, m.dlc);
+  switch (v) {
+    case E2eVerdict::kOk:
+    case E2eVerdict::kInitial:
+      return Status::kOk;
+    case E2eVerdict::kOkSomeLost:
+      stats_.frames_lost += static_cast<uint32_t>((rx.last_counter() + kAliveCounterModulo - before) %
+                                                  kAliveCounterModulo) - 1U;
+      return Status::kOk;
+    case E2eVerdict::kWrongCrc:
+      ++stats_.crc_errors;
+      return Status::kRejected;
+    case E2eVerdict::kBadLength:
+      ++stats_.length_errors;
+      return Status::kRejected;
+    case E2eVerdict::kRepeated:
+    case E2eVerdict::kWrongSequence:
+    case E2eVerdict::kBadCounter:
+      ++stats_.counter_errors;
+      return Status::kRejected;
+  }
+  return Status::kRejected;
+}
+
+Status CanSensorDecoder::on_frame(const hal::CanFrame& f, uint64_t now_us, CanSensorSample& out) {
+  for (size_t i = 0; i < kNumInputs; ++i) {
+    if (f.id != kInputIds[i]) continue;
+    const Status s = check(i, *find_message(f.id), f);
+    if (s != Status::kOk) return s;
+    if (i < kImuFrames) return on_imu_part(i, f, now_us, out);
+    return on_uwb_part(i - kImuFrames, f, now_us, out);
+  }
+  return Status::kNotFound;
+}
+
+Status CanSensorDecoder::on_imu_part(size_t part, const hal::CanFrame& f, uint64_t now_us, CanSensorSample& out) {
+  FrameMeta meta;
+  HilImuTimeMsg time;
+  HilImuAccelMsg accel;
+  HilImuGyroMsg gyro;
+  const Status s = part == 0 ? decode(f, time, &meta) : part == 1 ? decode(f, accel, &meta) : decode(f, gyro, &meta);
+  if (s != Status::kOk) return Status::kRejected;  // unreachable after check(); defensive
+  if (imu_.have != 0 && imu_.counter != meta.counter) {
+    ++stats_.incomplete;
+    imu_ = ImuGroup{};
+  }
+  imu_.counter = meta.counter;
+  imu_.have = static_cast<uint8_t>(imu_.have | (1U << part));
+  imu_.saturated = imu_.saturated || meta.saturated;
+  if (part == 0) {
+    imu_.t32_us = time.t_sensor_us;
+  } else if (part == 1) {
+    imu_.sample.accel_body_mps2 = accel.accel_body_mps2;
+  } else {
+    imu_.sample.gyro_body_radps = gyro.gyro_body_radps;
+  }
+  if (imu_.have != kImuAll) return Status::kEmpty;
+  const ImuGroup done = imu_;
+  imu_ = ImuGroup{};
+  if (done.saturated) {
+    ++stats_.saturated;
+    return Status::kRejected;
+  }
+  out.kind = SensorKind::kImu;
+  out.imu = done.sample;
+  out.imu.t_us = unwrap_time_us(done.t32_us, now_us);
+  ++stats_.imu_samples;
+  return Status::kOk;
+}
+
+Status CanSensorDecoder::on_uwb_part(size_t part, const hal::CanFrame& f, uint64_t now_us, CanSensorSample& out) {
+  FrameMeta meta;
+  HilUwbRangeMsg range;
+  HilUwbTimeMsg time;
+  const Status s = part == 0 ? decode(f, range, &meta) : decode(f, time, &meta);
+  if (s != Status::kOk) return Status::kRejected;  // unreachable after check(); defensive
+  if (uwb_.have != 0 && uwb_.counter != meta.counter) {
+    ++stats_.incomplete;
+    uwb_ = UwbGroup{};
+  }
+  uwb_.counter = meta.counter;
+  uwb_.have = static_cast<uint8_t>(uwb_.have | (1U << part));
+  uwb_.saturated = uwb_.saturated || meta.saturated;
+  if (part == 0) {
+    uwb_.range.anchor_id = range.anchor_id;
+    uwb_.range.tag_id = range.tag_id;
+    uwb_.range.range_m = range.range_m;
+  } else {
+    uwb_.t32_us = time.t_sensor_us;
+    uwb_.range.fp_power_dbm = time.fp_power_dbm;
+    uwb_.range.rx_power_dbm = time.rx_power_dbm;
+  }
+  if (uwb_.have != kUwbAll) return Status::kEmpty;
+  const UwbGroup done = uwb_;
+  uwb_ = UwbGroup{};
+  if (done.saturated) {
+    ++stats_.saturated;
+    return Status::kRejected;
+  }
+  out.kind = SensorKind::kUwb;
+  out.uwb = done.range;
+  out.uwb.t_us = unwrap_time_us(done.t32_us, now_us);
+  ++stats_.uwb_ranges;
+  return Status::kOk;
+}
+
+}  // namespace uwbnav::can

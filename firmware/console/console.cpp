@@ -1,0 +1,322 @@
+// Console core: input budget, line handling, command dispatch, paced replies,
+// streams and the bounded TX path (see console.hpp; commands in console_commands.cpp).
+#include "firmware/console/console.hpp"
+
+#include <cstdarg>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+#include "estimator/params.hpp"
+#include "firmware/app.hpp"
+
+namespace uwbnav {
+namespace {
+
+constexpr size_t kMarkerMax = 40;      // "[dropped N bytes]\r\n" [bytes]
+constexpr size_t kMaxJobLinesPerPoll = 16;
+
+}  // namespace
+
+Console::Console(App& app) : app_(app) { logger().set_sink(this); }
+
+Console::~Console() {
+  if (logger().sink() == this) logger().set_sink(nullptr);
+}
+
+void Console::apply_log_params() {
+  const Params& p = app_.params();
+  logger().set_level(static_cast<LogLevel>(static_cast<uint8_t>(p.get(ParamId::kConsoleLogLevel))));
+  logger().set_rate_per_s(static_cast<uint32_t>(p.get(ParamId::kConsoleLogRate)));
+  logger().set_time_us(now_us_);
+}
+
+void Console::poll(uint64_t now_us) {
+  now_us_ = now_us;
+  apply_log_params();
+  poll_commands_ = 0;
+  if (!banner_done_) {
+    banner_done_ = true;
+    banner();
+  }
+  if (job_ == Job::kNone) process_input();
+  run_job();
+  run_streams();
+  flush();
+  if (poll_commands_ > stats_.max_commands_per_poll) stats_.max_commands_per_poll = poll_commands_;
+}
+
+// Reads and handles at most kRxBytesPerPoll bytes and at most one line. Input
+// waits in the port while a long reply is being paced out or while the TX ring
+// is short of room for a reply (a slow reader slows the console, not the loop).
+void Console::process_input() {
+  size_t read_this_poll = 0;
+  size_t fed = 0;
+  hal::SerialPort& port = app_.board().serial;
+  while (poll_commands_ == 0 && fed < kRxBytesPerPoll && tx_.free() >= kReplyReserve) {
+    if (rx_pos_ == rx_len_) {
+      rx_pos_ = 0;
+      rx_len_ = 0;
+      if (read_this_poll >= kRxBytesPerPoll) break;
+      const size_t n = port.read(rx_buf_, kRxBytesPerPoll - read_this_poll);
+      if (n == 0) break;
+      rx_len_ = n <= kRxBytesPerPoll - read_this_poll ? n : kRxBytesPerPoll - read_this_poll;
+      read_this_poll += rx_len_;
+      stats_.rx_bytes += rx_len_;
+    }
+    const LineEditor::Event e = editor_.feed(rx_buf_[rx_pos_++]);
+    ++fed;
+    if (echo_ && editor_.echo_len() > 0) queue_raw(editor_.echo(), editor_.echo_len());
+    switch (e) {
+      case LineEditor::Event::kNone:
+        break;
+      case LineEditor::Event::kLine:
+        ++stats_.lines;
+        handle_line(editor_.line());
+        break;
+      case LineEditor::Event::kOverlong:
+        ++stats_.lines;
+        ++stats_.overlong_lines;
+        ++poll_commands_;
+        error("line too long (%lu bytes, max %lu), ignored", static_cast<unsigned long>(editor_.overlong_count()),
+              static_cast<unsigned long>(LineEditor::kMaxChars));
+        prompt();
+        break;
+      case LineEditor::Event::kGarbage:
+        ++stats_.lines;
+        ++stats_.garbage_lines;
+        ++poll_commands_;
+        error("non-printable input (%lu bytes), line ignored", static_cast<unsigned long>(editor_.garbage_count()));
+        prompt();
+        break;
+      case LineEditor::Event::kCancel:
+        prompt();
+        break;
+    }
+  }
+  if (read_this_poll > stats_.max_rx_per_poll) stats_.max_rx_per_poll = static_cast<uint32_t>(read_this_poll);
+}
+
+// History expansion (!! and !N), then execution of one line.
+void Console::handle_line(const char* line) {
+  while (*line == ' ') ++line;
+  if (*line == '\0') {
+    prompt();
+    return;
+  }
+  ++poll_commands_;
+  const char* text = line;
+  if (line[0] == '!') {
+    uint32_t seq = 0;
+    if (std::strcmp(line, "!!") == 0) {
+      seq = editor_.history_newest();
+    } else {
+      char* endp = nullptr;
+      const unsigned long v = std::strtoul(line + 1, &endp, 10);
+      if (endp != line + 1 && *endp == '\0') seq = static_cast<uint32_t>(v);
+    }
+    text = editor_.history_find(seq);
+    if (text == nullptr) {
+      error("history: no entry '%s' (see history)", line);
+      prompt();
+      return;
+    }
+  }
+  std::strncpy(cmd_, text, sizeof cmd_ - 1);
+  cmd_[sizeof cmd_ - 1] = '\0';
+  editor_.history_add(cmd_);
+  execute(cmd_);
+}
+
+void Console::execute(char* line) {
+  ++stats_.commands;
+  char* argv[kMaxArgs];
+  size_t argc = 0;
+  char* p = line;
+  for (;;) {
+    while (*p == ' ') ++p;
+    if (*p == '\0') break;
+    if (argc == kMaxArgs) {
+      error("too many arguments (max %lu words)", static_cast<unsigned long>(kMaxArgs));
+      prompt();
+      return;
+    }
+    argv[argc++] = p;
+    while (*p != '\0' && *p != ' ') ++p;
+    if (*p == ' ') *p++ = '\0';
+  }
+  for (size_t i = 0; i < kNumCommands; ++i) {
+    if (std::strcmp(argv[0], kCommands[i].name) == 0) {
+      (this->*kCommands[i].handler)(argc, argv);
+      if (job_ == Job::kNone) prompt();
+      return;
+    }
+  }
+  error("unknown command '%s' (try help)", argv[0]);
+  prompt();
+}
+
+void Console::start_job(Job job, bool verbose) {
+  job_ = job;
+  job_step_ = 0;
+  job_verbose_ = verbose;
+}
+
+bool Console::job_step() {
+  const size_t step = job_step_++;
+  switch (job_) {
+    case Job::kNone: return false;
+    case Job::kHelp: return step_help(step);
+    case Job::kParamList: return step_param_list(step);
+    case Job::kAnchors: return step_anchors(step);
+    case Job::kEkf: return step_ekf(step);
+    case Job::kStats: return step_stats(step);
+    case Job::kHistory: return step_history(step);
+  }
+  return false;
+}
+
+// Paces a long reply: a line is produced only when it is sure to fit.
+void Console::run_job() {
+  size_t lines = 0;
+  while (job_ != Job::kNone && lines < kMaxJobLinesPerPoll && tx_.free() >= kOutLineMax + kMarkerMax) {
+    ++lines;
+    if (!job_step()) {
+      job_ = Job::kNone;
+      prompt();
+    }
+  }
+}
+
+void Console::run_streams() {
+  for (size_t k = 0; k < static_cast<size_t>(StreamKind::kCount); ++k) {
+    const uint32_t rate = stream_rate_hz_[k];
+    if (rate == 0 || now_us_ < stream_next_us_[k]) continue;
+    const uint64_t period_us = 1000000U / rate;
+    stream_next_us_[k] += period_us;
+    if (stream_next_us_[k] <= now_us_) stream_next_us_[k] = now_us_ + period_us;  // late start or a gap
+    switch (static_cast<StreamKind>(k)) {
+      case StreamKind::kPos:
+        begin("$pos");
+        add_pos_fields();
+        end_line(kReplyReserve);
+        break;
+      case StreamKind::kStats: {
+        const AppStats& s = app_.stats();
+        const hal::CanCounters& c = app_.board().can.counters();
+        begin("$stats");
+        add(" t_us=%llu imu_rx=%lu imu_ok=%lu uwb_rx=%lu uwb_ok=%lu uwb_rej=%lu cycles=%llu overruns=%llu"
+            " cycle_max_us=%lu can_tx_ok=%lu can_tx_dropped=%lu dropped_bytes=%llu",
+            static_cast<unsigned long long>(now_us_), static_cast<unsigned long>(s.imu.received),
+            static_cast<unsigned long>(s.imu.accepted), static_cast<unsigned long>(s.uwb.received),
+            static_cast<unsigned long>(s.uwb.accepted), static_cast<unsigned long>(s.uwb.rejected_total()),
+            static_cast<unsigned long long>(s.loop.cycles), static_cast<unsigned long long>(s.loop.overruns),
+            static_cast<unsigned long>(s.loop.cycle_max_us), static_cast<unsigned long>(c.tx_ok),
+            static_cast<unsigned long>(c.tx_dropped), static_cast<unsigned long long>(stats_.dropped_bytes));
+        end_line(kReplyReserve);
+        break;
+      }
+      case StreamKind::kAnchors:
+        stream_anchor_lines();
+        break;
+      case StreamKind::kCount:
+        break;
+    }
+  }
+}
+
+void Console::flush() {
+  hal::SerialPort& port = app_.board().serial;
+  size_t written = 0;
+  while (written < kTxBytesPerPoll && !tx_.empty()) {
+    size_t avail = 0;
+    const uint8_t* data = tx_.peek(&avail);
+    const size_t want = avail < kTxBytesPerPoll - written ? avail : kTxBytesPerPoll - written;
+    size_t n = port.write(data, want);
+    if (n > want) n = want;
+    tx_.consume(n);
+    written += n;
+    if (n < want) break;  // the reader is slow: the rest waits for the next poll
+  }
+  stats_.tx_bytes += written;
+  if (written > stats_.max_tx_per_poll) stats_.max_tx_per_poll = static_cast<uint32_t>(written);
+}
+
+void Console::begin(const char* tag) {
+  out_len_ = 0;
+  out_[0] = '\0';
+  add("%s", tag);
+}
+
+void Console::add(const char* fmt, ...) {
+  const size_t cap = kOutLineMax - 2;  // room for CR LF
+  if (out_len_ + 1 >= cap) return;
+  va_list ap;
+  va_start(ap, fmt);
+  const int w = std::vsnprintf(out_ + out_len_, cap - out_len_, fmt, ap);
+  va_end(ap);
+  if (w < 0) return;
+  out_len_ = out_len_ + static_cast<size_t>(w) < cap ? out_len_ + static_cast<size_t>(w) : cap - 1;
+}
+
+void Console::end_line(size_t reserve) {
+  out_[out_len_++] = '\r';
+  out_[out_len_++] = '\n';
+  (void)queue(out_, out_len_, reserve);
+  out_len_ = 0;
+}
+
+void Console::error(const char* fmt, ...) {
+  ++stats_.errors;
+  out_len_ = 0;
+  add("error: ");
+  const size_t cap = kOutLineMax - 2;
+  va_list ap;
+  va_start(ap, fmt);
+  const int w = std::vsnprintf(out_ + out_len_, cap - out_len_, fmt, ap);
+  va_end(ap);
+  if (w > 0) out_len_ = out_len_ + static_cast<size_t>(w) < cap ? out_len_ + static_cast<size_t>(w) : cap - 1;
+  end_line(0);
+}
+
+// Queues a whole line (preceded by the drop marker when output was lost), or
+// drops it and counts it. `reserve` bytes must stay free afterwards.
+bool Console::queue(const char* text, size_t len, size_t reserve) {
+  char marker[kMarkerMax];
+  size_t marker_len = 0;
+  if (pending_drop_bytes_ > 0) {
+    const int w = std::snprintf(marker, sizeof marker, "[dropped %llu bytes]\r\n",
+                                static_cast<unsigned long long>(pending_drop_bytes_));
+    marker_len = w > 0 ? static_cast<size_t>(w) : 0;
+  }
+  if (tx_.free() < marker_len + len + reserve) {
+    pending_drop_bytes_ += len;
+    stats_.dropped_bytes += len;
+    return false;
+  }
+  if (marker_len > 0) {
+    (void)tx_.push(marker, marker_len);
+    pending_drop_bytes_ = 0;
+  }
+  (void)tx_.push(text, len);
+  return true;
+}
+
+// Echo bytes: queued when they fit, otherwise dropped and counted like lines.
+void Console::queue_raw(const char* text, size_t len) { (void)queue(text, len, 0); }
+
+void Console::prompt() {
+  if (echo_) queue_raw(LineEditor::kPrompt, std::strlen(LineEditor::kPrompt));
+}
+
+void Console::log_line(LogLevel level, const char* text, size_t len) {
+  if (len > kOutLineMax - 2) len = kOutLineMax - 2;
+  std::memcpy(out_log_, text, len);
+  out_log_[len++] = '\r';
+  out_log_[len++] = '\n';
+  // Errors and warnings may use the reply reserve; info and debug leave it free.
+  const bool urgent = level == LogLevel::kError || level == LogLevel::kWarn;
+  (void)queue(out_log_, len, urgent ? 0 : kReplyReserve);
+}
+
+}  // namespace uwbnav

@@ -1,0 +1,536 @@
+// Console commands: help, version, status, stats, anchors, ekf, param, log,
+// stream, reset, history, echo. Reply format: docs/console.md.
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+
+#include "estimator/nlos/svm_model.hpp"
+#include "estimator/params.hpp"
+#include "firmware/app.hpp"
+#include "firmware/console/console.hpp"
+
+#ifndef UWBNAV_VERSION
+#define UWBNAV_VERSION "unknown"
+#endif
+#ifndef UWBNAV_GIT_HASH
+#define UWBNAV_GIT_HASH "unknown"
+#endif
+
+namespace uwbnav {
+namespace {
+
+constexpr double kRadToDeg = 57.29577951308232;
+
+double d(float f) { return static_cast<double>(f); }
+unsigned long ul(uint32_t v) { return static_cast<unsigned long>(v); }
+unsigned long long ull(uint64_t v) { return static_cast<unsigned long long>(v); }
+
+const char* can_state_name(hal::CanBusState s) {
+  switch (s) {
+    case hal::CanBusState::kErrorActive: return "error_active";
+    case hal::CanBusState::kErrorPassive: return "error_passive";
+    case hal::CanBusState::kBusOff: return "bus_off";
+    case hal::CanBusState::kDown: return "down";
+  }
+  return "unknown";
+}
+
+uint32_t crc_bytes(uint32_t crc, uint32_t v, size_t n) {
+  uint8_t b[4];
+  for (size_t i = 0; i < n; ++i) b[i] = static_cast<uint8_t>(v >> (8U * i));
+  return crc32_update(crc, b, n);
+}
+
+uint32_t crc_float(uint32_t crc, float f) {
+  uint32_t bits = 0;
+  std::memcpy(&bits, &f, sizeof bits);
+  return crc_bytes(crc, bits, 4);
+}
+
+// CRC-32 of the parameter table layout (stable ids, names, defaults, bounds):
+// two builds with the same checksum read a parameter store the same way.
+uint32_t params_table_crc32() {
+  uint32_t crc = 0;
+  for (const ParamDef& p : kParamDefs) {
+    crc = crc_bytes(crc, p.stable_id, 2);
+    crc = crc32_update(crc, reinterpret_cast<const uint8_t*>(p.name), std::strlen(p.name));
+    crc = crc_float(crc, p.def);
+    crc = crc_float(crc, p.min);
+    crc = crc_float(crc, p.max);
+  }
+  return crc;
+}
+
+// Strict float parse: the whole word must be a finite number.
+bool parse_float(const char* text, float* out) {
+  char* endp = nullptr;
+  const float v = std::strtof(text, &endp);
+  if (endp == text || *endp != '\0' || !std::isfinite(v)) return false;
+  *out = v;
+  return true;
+}
+
+bool parse_rate(const char* text, uint32_t* out) {
+  if (std::strcmp(text, "off") == 0) {
+    *out = 0;
+    return true;
+  }
+  char* endp = nullptr;
+  const unsigned long v = std::strtoul(text, &endp, 10);
+  if (endp == text || *endp != '\0' || text[0] == '-' || v > Console::kMaxStreamRateHz) return false;
+  *out = static_cast<uint32_t>(v);
+  return true;
+}
+
+constexpr const char* kStreamNames[] = {"pos", "stats", "anchors"};
+static_assert(sizeof kStreamNames / sizeof kStreamNames[0] == static_cast<size_t>(StreamKind::kCount),
+              "one name per stream");
+
+}  // namespace
+
+const Console::Command Console::kCommands[] = {
+    {"help", "help", "this list", &Console::cmd_help},
+    {"version", "version", "firmware version, git hash, parameter table and NLOS model checksums",
+     &Console::cmd_version},
+    {"status", "status", "mode, position +- 1-sigma, time since last IMU/UWB, ranges used", &Console::cmd_status},
+    {"stats", "stats", "loop timing, frames and rejects per source, CAN, estimator, console counters",
+     &Console::cmd_stats},
+    {"anchors", "anchors", "per anchor: last range, innovation, NLOS probability, LOS/NLOS counts, state",
+     &Console::cmd_anchors},
+    {"ekf", "ekf [-v]", "state vector and covariance diagonal (-v: full 15x15 covariance)", &Console::cmd_ekf},
+    {"param", "param list|get NAME|set NAME VALUE|save|load|reset [NAME]",
+     "parameters (bounds-checked, applied live; save/load: parameter store)", &Console::cmd_param},
+    {"log", "log level [error|warn|info|debug]", "show or set the log level (param console.log_level)",
+     &Console::cmd_log},
+    {"stream", "stream [pos|stats|anchors RATE_HZ|off]", "periodic machine-readable lines ($pos, $stats, $anchor)",
+     &Console::cmd_stream},
+    {"reset", "reset filter|stats", "restart the estimator, or zero the counters", &Console::cmd_reset},
+    {"history", "history", "recent lines; !! repeats the last, !N repeats entry N", &Console::cmd_history},
+    {"echo", "echo [on|off]", "echo of typed characters and the prompt", &Console::cmd_echo},
+};
+const size_t Console::kNumCommands = sizeof Console::kCommands / sizeof Console::kCommands[0];
+
+void Console::banner() {
+  begin("console");
+  add(" ready fw=%s git=%s (type help)", UWBNAV_VERSION, UWBNAV_GIT_HASH);
+  reply_end();
+  prompt();
+}
+
+void Console::cmd_help(size_t argc, char**) {
+  if (argc != 1) {
+    error("help: takes no arguments");
+    return;
+  }
+  start_job(Job::kHelp, false);
+}
+
+bool Console::step_help(size_t step) {
+  if (step >= kNumCommands) return false;
+  begin("help ");
+  add("%-58s %s", kCommands[step].usage, kCommands[step].summary);
+  reply_end();
+  return step + 1 < kNumCommands;
+}
+
+void Console::cmd_version(size_t argc, char**) {
+  if (argc != 1) {
+    error("version: takes no arguments");
+    return;
+  }
+  begin("version");
+  add(" fw=%s git=%s params=%lu params_crc=0x%08lx svm1_crc=0x%08lx svm2_crc=0x%08lx", UWBNAV_VERSION,
+      UWBNAV_GIT_HASH, static_cast<unsigned long>(kNumParams), static_cast<unsigned long>(params_table_crc32()),
+      ul(kSvmModelRangeRate.crc32), ul(kSvmModelRangeRateSpeed.crc32));
+  reply_end();
+}
+
+void Console::add_pos_fields() {
+  const NavOutput& o = app_.last_output();
+  const float speed_mps = std::sqrt(o.vel_nav_mps.x * o.vel_nav_mps.x + o.vel_nav_mps.y * o.vel_nav_mps.y);
+  add(" t_us=%llu mode=%s x_m=%.3f y_m=%.3f z_m=%.3f sx_m=%.3f sy_m=%.3f sz_m=%.3f speed_mps=%.2f"
+      " heading_deg=%.1f used=%u rejected=%u",
+      ull(o.t_us), nav_status_name(o.status), d(o.pos_nav_m.x), d(o.pos_nav_m.y), d(o.pos_nav_m.z),
+      d(o.pos_sigma_m.x), d(o.pos_sigma_m.y), d(o.pos_sigma_m.z), d(speed_mps),
+      d(o.heading_rad) * kRadToDeg, static_cast<unsigned>(o.ranges_used), static_cast<unsigned>(o.ranges_rejected));
+}
+
+void Console::cmd_status(size_t argc, char**) {
+  if (argc != 1) {
+    error("status: takes no arguments");
+    return;
+  }
+  const NavDiagnostics& dg = app_.navigator().diagnostics();
+  const uint64_t now = app_.last_tick_us();
+  begin("status");
+  add_pos_fields();
+  if (dg.last_imu_t_us == 0 || dg.last_imu_t_us > now) {
+    add(" imu_age_ms=none");
+  } else {
+    add(" imu_age_ms=%llu", ull((now - dg.last_imu_t_us) / 1000U));
+  }
+  if (dg.last_range_used_t_us == 0 || dg.last_range_used_t_us > now) {
+    add(" uwb_age_ms=none");
+  } else {
+    add(" uwb_age_ms=%llu", ull((now - dg.last_range_used_t_us) / 1000U));
+  }
+  add(" used_total=%lu resets=%lu", ul(dg.ranges_used), ul(dg.resets));
+  reply_end();
+}
+
+void Console::cmd_stats(size_t argc, char**) {
+  if (argc != 1) {
+    error("stats: takes no arguments");
+    return;
+  }
+  start_job(Job::kStats, false);
+}
+
+bool Console::step_stats(size_t step) {
+  const AppStats& s = app_.stats();
+  switch (step) {
+    case 0: {
+      const LoopStats& l = s.loop;
+      begin("stats loop");
+      add(" cycles=%llu overruns=%llu cycle_min_us=%lu cycle_avg_us=%lu cycle_max_us=%lu jitter_max_us=%lu",
+          ull(l.cycles), ull(l.overruns), ul(l.cycle_min_us), ul(l.avg_us()), ul(l.cycle_max_us),
+          ul(l.jitter_max_us));
+      break;
+    }
+    case 1:
+    case 2:
+    case 3: {
+      const SourceStats& src = step == 1 ? s.imu : (step == 2 ? s.uwb : s.can_rx);
+      begin("stats src=");
+      add("%s received=%lu accepted=%lu io_errors=%lu", step == 1 ? "imu" : (step == 2 ? "uwb" : "can_rx"),
+          ul(src.received), ul(src.accepted), ul(src.io_errors));
+      for (uint32_t r = 0; r < kNumRejectReasons; ++r) {
+        add(" %s=%lu", reject_reason_name(static_cast<RejectReason>(r)), ul(src.rejected[r]));
+      }
+      break;
+    }
+    case 4: {
+      const hal::CanCounters& c = app_.board().can.counters();
+      begin("stats can");
+      add(" state=%s tx_ok=%lu tx_dropped=%lu bus_off=%lu rx_ok=%lu rx_overflow=%lu error_frames=%lu",
+          can_state_name(app_.board().can.state()), ul(c.tx_ok), ul(c.tx_dropped), ul(c.bus_off), ul(c.rx_ok),
+          ul(c.rx_overflow), ul(c.error_frames));
+      break;
+    }
+    case 5: {
+      const NavDiagnostics& dg = app_.navigator().diagnostics();
+      begin("stats nav");
+      add(" imu_samples=%lu ranges_received=%lu ranges_used=%lu ranges_rejected=%lu resets=%lu reinits=%lu",
+          ul(dg.imu_samples), ul(dg.ranges_received), ul(dg.ranges_used), ul(dg.ranges_rejected), ul(dg.resets),
+          ul(dg.reinits));
+      break;
+    }
+    default: {
+      const LogCounters& lc = logger().counters();
+      begin("stats console");
+      add(" rx_bytes=%llu tx_bytes=%llu dropped_bytes=%llu lines=%lu commands=%lu errors=%lu overlong=%lu"
+          " garbage=%lu max_rx_per_tick=%lu max_tx_per_tick=%lu log_emitted=%lu log_suppressed=%lu",
+          ull(stats_.rx_bytes), ull(stats_.tx_bytes), ull(stats_.dropped_bytes), ul(stats_.lines),
+          ul(stats_.commands), ul(stats_.errors), ul(stats_.overlong_lines), ul(stats_.garbage_lines),
+          ul(stats_.max_rx_per_poll), ul(stats_.max_tx_per_poll), ul(lc.emitted), ul(lc.suppressed));
+      reply_end();
+      return false;
+    }
+  }
+  reply_end();
+  return true;
+}
+
+void Console::cmd_anchors(size_t argc, char**) {
+  if (argc != 1) {
+    error("anchors: takes no arguments");
+    return;
+  }
+  start_job(Job::kAnchors, false);
+}
+
+bool Console::step_anchors(size_t step) {
+  const Navigator& nav = app_.navigator();
+  const size_t n = nav.num_anchors();
+  if (step == 0) {
+    begin("anchors");
+    add(" count=%lu", static_cast<unsigned long>(n));
+    reply_end();
+    return n > 0;
+  }
+  const AnchorStatus& a = nav.anchor_status(step - 1);
+  const uint64_t now = app_.last_tick_us();
+  begin("anchors");
+  add(" id=%u state=%s range_m=%.3f innov_m=%.3f p_nlos=%.3f los=%lu nlos=%lu used=%lu",
+      static_cast<unsigned>(a.anchor_id), a.nlos_state ? "nlos" : "los", d(a.last_range_m),
+      d(a.last_innovation_m), d(a.last_p_nlos), ul(a.los_count), ul(a.nlos_count), ul(a.used_count));
+  if (a.last_t_us == 0 || a.last_t_us > now) {
+    add(" age_ms=none");
+  } else {
+    add(" age_ms=%llu", ull((now - a.last_t_us) / 1000U));
+  }
+  reply_end();
+  return step < n;
+}
+
+void Console::stream_anchor_lines() {
+  const Navigator& nav = app_.navigator();
+  for (size_t i = 0; i < nav.num_anchors(); ++i) {
+    const AnchorStatus& a = nav.anchor_status(i);
+    begin("$anchor");
+    add(" t_us=%llu id=%u state=%s range_m=%.3f innov_m=%.3f p_nlos=%.3f los=%lu nlos=%lu used=%lu", ull(now_us_),
+        static_cast<unsigned>(a.anchor_id), a.nlos_state ? "nlos" : "los", d(a.last_range_m),
+        d(a.last_innovation_m), d(a.last_p_nlos), ul(a.los_count), ul(a.nlos_count), ul(a.used_count));
+    end_line(kReplyReserve);
+  }
+}
+
+void Console::cmd_ekf(size_t argc, char** argv) {
+  const bool verbose = argc == 2 && std::strcmp(argv[1], "-v") == 0;
+  if (argc > 2 || (argc == 2 && !verbose)) {
+    error("ekf: usage: ekf [-v]");
+    return;
+  }
+  start_job(Job::kEkf, verbose);
+}
+
+bool Console::step_ekf(size_t step) {
+  const Navigator& nav = app_.navigator();
+  constexpr size_t kStates = Navigator::kErrorStateSize;
+  if (step == 0) {
+    float x[16];
+    nav.state_vector(x);
+    begin("ekf state");
+    add(" p_m=%.3f,%.3f,%.3f v_mps=%.3f,%.3f,%.3f q=%.5f,%.5f,%.5f,%.5f ba_mps2=%.4f,%.4f,%.4f"
+        " bg_radps=%.5f,%.5f,%.5f",
+        d(x[0]), d(x[1]), d(x[2]), d(x[3]), d(x[4]), d(x[5]), d(x[6]), d(x[7]), d(x[8]), d(x[9]), d(x[10]),
+        d(x[11]), d(x[12]), d(x[13]), d(x[14]), d(x[15]));
+    reply_end();
+    return true;
+  }
+  if (step == 1) {
+    float p[kStates];
+    nav.covariance_diagonal(p);
+    begin("ekf pdiag");
+    add(" p_m2=%.3g,%.3g,%.3g v_m2ps2=%.3g,%.3g,%.3g att_rad2=%.3g,%.3g,%.3g ba_m2ps4=%.3g,%.3g,%.3g"
+        " bg_rad2ps2=%.3g,%.3g,%.3g",
+        d(p[0]), d(p[1]), d(p[2]), d(p[3]), d(p[4]), d(p[5]), d(p[6]), d(p[7]), d(p[8]), d(p[9]), d(p[10]),
+        d(p[11]), d(p[12]), d(p[13]), d(p[14]));
+    reply_end();
+    return job_verbose_;
+  }
+  const size_t row = step - 2;
+  begin("ekf cov");
+  add(" row=%lu v=", static_cast<unsigned long>(row));
+  for (size_t c = 0; c < kStates; ++c) add(c == 0 ? "%.3g" : ",%.3g", d(nav.covariance(row, c)));
+  reply_end();
+  return row + 1 < kStates;
+}
+
+void Console::add_param(size_t index, bool with_doc) {
+  const ParamDef& p = kParamDefs[index];
+  add(" name=%s value=%g default=%g min=%g max=%g unit=%s", p.name, d(app_.params().get(p.index)), d(p.def),
+      d(p.min), d(p.max), p.unit);
+  if (with_doc) add(" doc=\"%s\"", p.doc);
+}
+
+bool Console::step_param_list(size_t step) {
+  if (step == 0) {
+    begin("param");
+    add(" count=%lu", static_cast<unsigned long>(kNumParams));
+    reply_end();
+    return kNumParams > 0;
+  }
+  begin("param");
+  add_param(step - 1, false);
+  reply_end();
+  return step < kNumParams;
+}
+
+void Console::cmd_param(size_t argc, char** argv) {
+  const char* sub = argc >= 2 ? argv[1] : "";
+  if (argc == 2 && std::strcmp(sub, "list") == 0) {
+    start_job(Job::kParamList, false);
+    return;
+  }
+  if (argc == 3 && std::strcmp(sub, "get") == 0) {
+    const ParamDef* p = Params::find(argv[2]);
+    if (p == nullptr) {
+      error("param: unknown parameter '%s' (see param list)", argv[2]);
+      return;
+    }
+    begin("param");
+    add_param(static_cast<size_t>(p->index), true);
+    reply_end();
+    return;
+  }
+  if (argc == 4 && std::strcmp(sub, "set") == 0) {
+    const ParamDef* p = Params::find(argv[2]);
+    if (p == nullptr) {
+      error("param: unknown parameter '%s' (see param list)", argv[2]);
+      return;
+    }
+    float v = 0.0F;
+    if (!parse_float(argv[3], &v)) {
+      error("param: '%s' is not a finite number; %s unchanged", argv[3], p->name);
+      return;
+    }
+    if (v < p->min || v > p->max) {
+      error("param: %s=%g out of range [%g, %g]; unchanged", p->name, d(v), d(p->min), d(p->max));
+      return;
+    }
+    const float old = app_.params().get(p->index);
+    const Status s = app_.set_param(p->index, v);
+    if (!ok(s)) {
+      error("param: set %s failed (%s); unchanged", p->name, status_name(s));
+      return;
+    }
+    UWBNAV_LOG_INFO("console", "param %s %g -> %g", p->name, d(old), d(v));
+    begin("param");
+    add(" name=%s value=%g old=%g", p->name, d(app_.params().get(p->index)), d(old));
+    reply_end();
+    return;
+  }
+  if (argc == 2 && (std::strcmp(sub, "save") == 0 || std::strcmp(sub, "load") == 0)) {
+    const bool save = sub[0] == 's';
+    const Status s = save ? app_.save_params() : app_.load_params();
+    if (!ok(s)) {
+      error("param: %s failed (%s)%s", sub, status_name(s), save ? "" : "; values unchanged");
+      return;
+    }
+    begin("param");
+    add(" %s=ok count=%lu", save ? "saved" : "loaded", static_cast<unsigned long>(kNumParams));
+    reply_end();
+    return;
+  }
+  if ((argc == 2 || argc == 3) && std::strcmp(sub, "reset") == 0) {
+    if (argc == 2) {
+      Params defaults;
+      app_.apply_params(defaults);
+      begin("param");
+      add(" reset=all count=%lu", static_cast<unsigned long>(kNumParams));
+      reply_end();
+      return;
+    }
+    const ParamDef* p = Params::find(argv[2]);
+    if (p == nullptr) {
+      error("param: unknown parameter '%s' (see param list)", argv[2]);
+      return;
+    }
+    const float old = app_.params().get(p->index);
+    ignore_status(app_.set_param(p->index, p->def));  // the default is inside [min, max] (static_assert)
+    begin("param");
+    add(" name=%s value=%g old=%g", p->name, d(app_.params().get(p->index)), d(old));
+    reply_end();
+    return;
+  }
+  error("param: usage: param list|get NAME|set NAME VALUE|save|load|reset [NAME]");
+}
+
+void Console::cmd_log(size_t argc, char** argv) {
+  if (argc < 2 || argc > 3 || std::strcmp(argv[1], "level") != 0) {
+    error("log: usage: log level [error|warn|info|debug]");
+    return;
+  }
+  if (argc == 3) {
+    LogLevel l = LogLevel::kInfo;
+    if (!parse_log_level(argv[2], &l)) {
+      error("log: unknown level '%s' (error|warn|info|debug)", argv[2]);
+      return;
+    }
+    ignore_status(app_.set_param(ParamId::kConsoleLogLevel, static_cast<float>(static_cast<uint8_t>(l))));
+    apply_log_params();
+  }
+  const LogCounters& lc = logger().counters();
+  begin("log");
+  add(" level=%s rate_per_s=%g emitted=%lu suppressed=%lu", log_level_name(logger().level()),
+      d(app_.params().get(ParamId::kConsoleLogRate)), ul(lc.emitted), ul(lc.suppressed));
+  reply_end();
+}
+
+void Console::cmd_stream(size_t argc, char** argv) {
+  if (argc == 2 && std::strcmp(argv[1], "off") == 0) {
+    for (uint32_t& r : stream_rate_hz_) r = 0;
+  } else if (argc == 3) {
+    size_t k = 0;
+    while (k < static_cast<size_t>(StreamKind::kCount) && std::strcmp(argv[1], kStreamNames[k]) != 0) ++k;
+    if (k == static_cast<size_t>(StreamKind::kCount)) {
+      error("stream: unknown stream '%s' (pos|stats|anchors)", argv[1]);
+      return;
+    }
+    uint32_t rate = 0;
+    if (!parse_rate(argv[2], &rate)) {
+      error("stream: rate '%s' not in 0..%lu Hz (or off)", argv[2], ul(kMaxStreamRateHz));
+      return;
+    }
+    stream_rate_hz_[k] = rate;
+    stream_next_us_[k] = now_us_;
+  } else if (argc != 1) {
+    error("stream: usage: stream [pos|stats|anchors RATE_HZ|off]");
+    return;
+  }
+  begin("stream");
+  for (size_t k = 0; k < static_cast<size_t>(StreamKind::kCount); ++k) {
+    add(" %s_hz=%lu", kStreamNames[k], ul(stream_rate_hz_[k]));
+  }
+  reply_end();
+}
+
+void Console::cmd_reset(size_t argc, char** argv) {
+  if (argc == 2 && std::strcmp(argv[1], "filter") == 0) {
+    app_.reset_filter();
+    UWBNAV_LOG_INFO("console", "filter reset by operator");
+    begin("reset filter=ok");
+    reply_end();
+    return;
+  }
+  if (argc == 2 && std::strcmp(argv[1], "stats") == 0) {
+    app_.reset_stats();
+    reset_stats();
+    logger().reset_counters();
+    begin("reset stats=ok");
+    reply_end();
+    return;
+  }
+  error("reset: usage: reset filter|stats");
+}
+
+void Console::cmd_history(size_t argc, char**) {
+  if (argc != 1) {
+    error("history: takes no arguments");
+    return;
+  }
+  start_job(Job::kHistory, false);
+}
+
+bool Console::step_history(size_t step) {
+  const uint32_t newest = editor_.history_newest();
+  const uint32_t oldest = editor_.history_oldest();
+  if (step == 0) {
+    begin("history");
+    add(" count=%lu", ul(newest == 0 ? 0 : newest - oldest + 1));
+    reply_end();
+    return newest > 0;
+  }
+  const uint32_t seq = oldest + static_cast<uint32_t>(step - 1);
+  const char* text = editor_.history_find(seq);
+  if (text == nullptr) return false;
+  begin("history");
+  add(" n=%lu line=%s", ul(seq), text);
+  reply_end();
+  return seq < newest;
+}
+
+void Console::cmd_echo(size_t argc, char** argv) {
+  if (argc == 2 && (std::strcmp(argv[1], "on") == 0 || std::strcmp(argv[1], "off") == 0)) {
+    echo_ = argv[1][1] == 'n';
+  } else if (argc != 1) {
+    error("echo: usage: echo [on|off]");
+    return;
+  }
+  begin("echo");
+  add(" %s", echo_ ? "on" : "off");
+  reply_end();
+}
+
+}  // namespace uwbnav

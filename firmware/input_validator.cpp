@@ -1,0 +1,96 @@
+// Input validation rules for IMU and UWB frames (see input_validator.hpp).
+#include "firmware/input_validator.hpp"
+
+#include <cmath>
+#include <cstring>
+
+namespace uwbnav {
+namespace {
+
+bool finite3(const Vec3f& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+float norm3(const Vec3f& v) { return std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
+
+Verdict reject(RejectReason r) { return Verdict{false, r}; }
+
+bool same_bits(float a, float b) {
+  uint32_t ua = 0;
+  uint32_t ub = 0;
+  std::memcpy(&ua, &a, sizeof ua);
+  std::memcpy(&ub, &b, sizeof ub);
+  return ua == ub;
+}
+
+}  // namespace
+
+void InputValidator::configure(const SiteConfig& site, const Params& params) {
+  site_ = &site;
+  update_params(params);
+  reset_history();
+}
+
+void InputValidator::update_params(const Params& params) {
+  max_accel_mps2_ = params[ParamId::kInImuMaxAccel];
+  max_gyro_radps_ = params[ParamId::kInImuMaxGyro];
+  min_range_m_ = params[ParamId::kUwbMinRange];
+  max_range_m_ = params[ParamId::kUwbMaxRange];
+  stale_us_ = static_cast<uint64_t>(params[ParamId::kInStaleUs]);
+  drop_repeated_ = params[ParamId::kInDropRepeated] > 0.5F;
+}
+
+void InputValidator::reset_history() {
+  have_imu_ = false;
+  have_uwb_ = false;
+  last_imu_t_us_ = 0;
+  last_uwb_t_us_ = 0;
+  std::memset(have_pair_, 0, sizeof have_pair_);
+}
+
+Verdict InputValidator::check_time(uint64_t t_us, uint64_t now_us, uint64_t last_t_us, bool have_last) const {
+  if (t_us > now_us) return reject(RejectReason::kFuture);
+  if (now_us - t_us > stale_us_) return reject(RejectReason::kStale);
+  if (have_last && t_us < last_t_us) return reject(RejectReason::kOutOfOrder);
+  return Verdict{true, RejectReason::kNotFinite};
+}
+
+Verdict InputValidator::check_imu(const ImuSample& s, uint64_t now_us) {
+  if (!finite3(s.accel_body_mps2) || !finite3(s.gyro_body_radps)) return reject(RejectReason::kNotFinite);
+  if (norm3(s.accel_body_mps2) > max_accel_mps2_ || norm3(s.gyro_body_radps) > max_gyro_radps_) {
+    return reject(RejectReason::kOutOfRange);
+  }
+  if (have_imu_ && s.t_us == last_imu_t_us_) return reject(RejectReason::kDuplicate);
+  const Verdict v = check_time(s.t_us, now_us, last_imu_t_us_, have_imu_);
+  if (!v.accepted) return v;
+  have_imu_ = true;
+  last_imu_t_us_ = s.t_us;
+  return v;
+}
+
+Verdict InputValidator::check_uwb(const UwbRange& r, uint64_t now_us) {
+  if (!std::isfinite(r.range_m)) return reject(RejectReason::kNotFinite);
+  // Channel diagnostics are optional (NaN = unknown) but never Inf.
+  if (std::isinf(r.fp_power_dbm) || std::isinf(r.rx_power_dbm)) return reject(RejectReason::kNotFinite);
+  if (r.range_m < min_range_m_ || r.range_m > max_range_m_) return reject(RejectReason::kOutOfRange);
+  if (site_ == nullptr) return reject(RejectReason::kUnknownAnchor);
+  const int a = site_->find_anchor(r.anchor_id);
+  if (a < 0) return reject(RejectReason::kUnknownAnchor);
+  const int g = site_->find_tag(r.tag_id);
+  if (g < 0) return reject(RejectReason::kUnknownTag);
+  const size_t ai = static_cast<size_t>(a);
+  const size_t gi = static_cast<size_t>(g);
+  if (have_pair_[ai][gi]) {
+    if (r.t_us == last_pair_t_us_[ai][gi]) return reject(RejectReason::kDuplicate);
+    // A radio re-reporting its previous result: bit-identical range from the same pair.
+    if (drop_repeated_ && same_bits(r.range_m, last_pair_range_m_[ai][gi])) return reject(RejectReason::kDuplicate);
+  }
+  const Verdict v = check_time(r.t_us, now_us, last_uwb_t_us_, have_uwb_);
+  if (!v.accepted) return v;
+  have_uwb_ = true;
+  last_uwb_t_us_ = r.t_us;
+  have_pair_[ai][gi] = true;
+  last_pair_t_us_[ai][gi] = r.t_us;
+  last_pair_range_m_[ai][gi] = r.range_m;
+  return v;
+}
+
+}  // namespace uwbnav

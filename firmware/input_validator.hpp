@@ -1,0 +1,52 @@
+// Input validation: every IMU and UWB frame is checked (NaN/Inf, physical range,
+// unknown anchor/tag, duplicate, out-of-order, stale, future) and counted per
+// reason before anything reaches the estimator.
+#pragma once
+
+#include <cstdint>
+
+#include "estimator/params.hpp"
+#include "estimator/types.hpp"
+#include "firmware/app_stats.hpp"
+
+namespace uwbnav {
+
+// Verdict on one frame: accepted, or the first reason it failed.
+struct Verdict {
+  bool accepted = false;
+  RejectReason reason = RejectReason::kNotFinite;
+};
+
+class InputValidator {
+ public:
+  // Binds the site (anchor/tag tables) and parameter limits; clears history.
+  void configure(const SiteConfig& site, const Params& params);
+  void update_params(const Params& params);
+  void reset_history();
+
+  // `now_us` is the loop time of the cycle that drains the frame.
+  Verdict check_imu(const ImuSample& s, uint64_t now_us);
+  Verdict check_uwb(const UwbRange& r, uint64_t now_us);
+
+ private:
+  Verdict check_time(uint64_t t_us, uint64_t now_us, uint64_t last_t_us, bool have_last) const;
+
+  const SiteConfig* site_ = nullptr;
+  float max_accel_mps2_ = 0.0F;
+  float max_gyro_radps_ = 0.0F;
+  float min_range_m_ = 0.0F;
+  float max_range_m_ = 0.0F;
+  uint64_t stale_us_ = 0;
+  bool drop_repeated_ = true;
+
+  bool have_imu_ = false;
+  uint64_t last_imu_t_us_ = 0;
+  bool have_uwb_ = false;
+  uint64_t last_uwb_t_us_ = 0;
+  // Last accepted range per (anchor index, tag index): duplicate / repeat detection.
+  uint64_t last_pair_t_us_[kMaxAnchors][kMaxTags] = {};
+  float last_pair_range_m_[kMaxAnchors][kMaxTags] = {};
+  bool have_pair_[kMaxAnchors][kMaxTags] = {};
+};
+
+}  // namespace uwbnav

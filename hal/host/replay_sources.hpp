@@ -1,0 +1,68 @@
+// Host IMU and UWB sources replaying a format v1 recording in timestamp order.
+// The UWB source hands out the range only: the NLOS label never reaches the firmware.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "hal/hal.hpp"
+#include "tools/dataset/recording.hpp"
+
+namespace uwbnav::hal {
+
+// Replays IMU samples. The samples (recording) must outlive the source.
+class ReplayImuSource : public ImuSource {
+ public:
+  explicit ReplayImuSource(const std::vector<ImuSample>& samples) : samples_(&samples) {}
+  explicit ReplayImuSource(const dataset::Recording& rec) : samples_(&rec.imu) {}
+
+  // kOk with the next sample when its t_us <= up_to_us, kEmpty otherwise.
+  [[nodiscard]] Status poll(uint64_t up_to_us, ImuSample& out) override;
+  bool finished() const override { return next_ >= samples_->size(); }
+
+  size_t delivered() const { return next_; }
+  size_t size() const { return samples_->size(); }
+  // Timestamp of the next sample [us]; only valid when !finished().
+  uint64_t next_t_us() const { return (*samples_)[next_].t_us; }
+  void rewind() { next_ = 0; }
+
+ private:
+  const std::vector<ImuSample>* samples_;
+  size_t next_ = 0;
+};
+
+// Replays UWB ranges, from recording rows (label dropped) or from bare ranges.
+// The rows must outlive the source.
+class ReplayUwbSource : public UwbSource {
+ public:
+  explicit ReplayUwbSource(const std::vector<dataset::UwbRow>& rows) : rows_(&rows) {}
+  explicit ReplayUwbSource(const std::vector<UwbRange>& ranges) : ranges_(&ranges) {}
+  explicit ReplayUwbSource(const dataset::Recording& rec) : rows_(&rec.uwb) {}
+
+  // kOk with the next range when its t_us <= up_to_us, kEmpty otherwise.
+  [[nodiscard]] Status poll(uint64_t up_to_us, UwbRange& out) override;
+  bool finished() const override { return next_ >= size(); }
+
+  size_t delivered() const { return next_; }
+  size_t size() const { return rows_ != nullptr ? rows_->size() : ranges_->size(); }
+  // Timestamp of the next range [us]; only valid when !finished().
+  uint64_t next_t_us() const { return at(next_).t_us; }
+  void rewind() { next_ = 0; }
+
+ private:
+  const UwbRange& at(size_t i) const { return rows_ != nullptr ? (*rows_)[i].range : (*ranges_)[i]; }
+
+  const std::vector<dataset::UwbRow>* rows_ = nullptr;
+  const std::vector<UwbRange>* ranges_ = nullptr;
+  size_t next_ = 0;
+};
+
+// Both replay sources of one recording (which must outlive them).
+struct ReplaySources {
+  explicit ReplaySources(const dataset::Recording& rec) : imu(rec), uwb(rec) {}
+  ReplayImuSource imu;
+  ReplayUwbSource uwb;
+};
+
+}  // namespace uwbnav::hal

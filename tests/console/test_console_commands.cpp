@@ -1,0 +1,422 @@
+// Console commands through an in-memory serial port on a simulated replay:
+// every command's reply format, parameter changes applied live and
+// bounds-checked, and bad input (unknown commands, wrong arguments, too-long
+// lines, binary garbage) answered by one error line without side effects.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "console_rig.hpp"
+#include "estimator/params.hpp"
+#include "firmware/console/console.hpp"
+#include "firmware/console/log.hpp"
+
+namespace uwbnav {
+namespace {
+
+using testing::ConsoleRig;
+using testing::kv;
+using testing::kv_num;
+using testing::lines_with_prefix;
+using testing::reply_lines;
+using testing::sim_recording;
+
+bool params_equal(const Params& a, const Params& b) {
+  for (size_t i = 0; i < kNumParams; ++i) {
+    const auto id = static_cast<ParamId>(i);
+    if (a.get(id) != b.get(id)) return false;
+  }
+  return true;
+}
+
+TEST(ConsoleCommands, BannerAndPromptAppearOnTheFirstCycle) {
+  const dataset::Recording& rec = sim_recording();
+  testing::MemSerialPort serial;
+  hal::ReplaySources src(rec);
+  hal::MemCanBus can;
+  hal::LockstepClock clock;
+  hal::EmptyParamStore store;
+  hal::Board board{src.imu, src.uwb, can, serial, clock, store, rec.site};
+  App app(board);
+  ASSERT_TRUE(ok(app.init()));
+  app.tick(testing::first_cycle_us(rec));
+  EXPECT_EQ(serial.output.rfind("console ready fw=", 0), 0U) << serial.output;
+  EXPECT_EQ(serial.output.substr(serial.output.size() - 2), "> ");
+}
+
+TEST(ConsoleCommands, HelpListsEveryCommandOnePerLine) {
+  ConsoleRig rig(sim_recording());
+  const auto lines = reply_lines(rig.command("help"));
+  const auto help = lines_with_prefix(lines, "help ");
+  EXPECT_EQ(help.size(), lines.size());
+  for (const char* name : {"help", "version", "status", "stats", "anchors", "ekf", "param", "log", "stream", "reset",
+                           "history", "echo"}) {
+    bool found = false;
+    for (const auto& l : help) found |= l.rfind(std::string("help ") + name, 0) == 0;
+    EXPECT_TRUE(found) << name;
+  }
+}
+
+TEST(ConsoleCommands, VersionShowsBuildGitHashAndChecksums) {
+  ConsoleRig rig(sim_recording());
+  const auto lines = reply_lines(rig.command("version"));
+  ASSERT_EQ(lines.size(), 1U);
+  const std::string& l = lines[0];
+  EXPECT_EQ(l.rfind("version fw=", 0), 0U);
+  EXPECT_FALSE(kv(l, "git").empty());
+  EXPECT_EQ(kv(l, "params"), std::to_string(kNumParams));
+  EXPECT_EQ(kv(l, "params_crc").size(), 10U);
+  EXPECT_EQ(kv(l, "svm2_crc").size(), 10U);
+  EXPECT_NE(kv(l, "svm2_crc"), "0x00000000");
+}
+
+TEST(ConsoleCommands, StatusReportsTheLastOutputAndSensorAges) {
+  ConsoleRig rig(sim_recording());
+  rig.run_s(20.0);
+  const auto lines = reply_lines(rig.command("status"));
+  ASSERT_EQ(lines.size(), 1U);
+  const std::string& l = lines[0];
+  const NavOutput& o = rig.app.last_output();
+  EXPECT_EQ(kv(l, "mode"), nav_status_name(o.status));
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f", static_cast<double>(o.pos_nav_m.x));
+  EXPECT_EQ(kv(l, "x_m"), buf);
+  std::snprintf(buf, sizeof buf, "%.3f", static_cast<double>(o.pos_sigma_m.y));
+  EXPECT_EQ(kv(l, "sy_m"), buf);
+  EXPECT_LE(kv_num(l, "imu_age_ms"), 20.0);  // IMU at 100 Hz or more
+  EXPECT_LE(kv_num(l, "uwb_age_ms"), 1000.0);
+  EXPECT_GT(kv_num(l, "used_total"), 100.0);
+}
+
+TEST(ConsoleCommands, StatsShowsLoopSourcesRejectsCanNavAndConsoleCounters) {
+  ConsoleRig rig(sim_recording());
+  rig.app.record_cycle_timing(120, 5, false);
+  rig.app.record_cycle_timing(480, 9, true);
+  rig.run_s(5.0);
+  const auto lines = reply_lines(rig.command("stats"));
+  ASSERT_EQ(lines.size(), 7U);
+  const AppStats& s = rig.app.stats();
+  EXPECT_EQ(lines[0].rfind("stats loop ", 0), 0U);
+  EXPECT_EQ(kv(lines[0], "overruns"), "1");
+  EXPECT_EQ(kv(lines[0], "cycle_min_us"), "120");
+  EXPECT_EQ(kv(lines[0], "cycle_avg_us"), "300");
+  EXPECT_EQ(kv(lines[0], "cycle_max_us"), "480");
+  EXPECT_EQ(kv(lines[1], "src"), "imu");
+  EXPECT_EQ(kv(lines[2], "src"), "uwb");
+  EXPECT_EQ(kv(lines[3], "src"), "can_rx");
+  EXPECT_EQ(kv(lines[2], "received"), std::to_string(s.uwb.received));
+  EXPECT_EQ(kv(lines[2], "accepted"), std::to_string(s.uwb.accepted));
+  for (uint32_t r = 0; r < kNumRejectReasons; ++r) {
+    const char* name = reject_reason_name(static_cast<RejectReason>(r));
+    EXPECT_EQ(kv(lines[2], name), std::to_string(s.uwb.rejected[r])) << name;
+  }
+  EXPECT_EQ(lines[4].rfind("stats can ", 0), 0U);
+  EXPECT_EQ(kv(lines[4], "tx_ok"), std::to_string(rig.can.counters().tx_ok));
+  EXPECT_EQ(kv(lines[4], "bus_off"), std::to_string(rig.can.counters().bus_off));
+  EXPECT_EQ(lines[5].rfind("stats nav ", 0), 0U);
+  EXPECT_EQ(kv(lines[5], "ranges_used"), std::to_string(rig.app.navigator().diagnostics().ranges_used));
+  EXPECT_EQ(lines[6].rfind("stats console ", 0), 0U);
+}
+
+TEST(ConsoleCommands, StatsShowsCanBusOffFromTheBoard) {
+  ConsoleRig rig(sim_recording());
+  rig.can.set_state(hal::CanBusState::kBusOff);
+  const auto lines = reply_lines(rig.command("stats"));
+  ASSERT_EQ(lines.size(), 7U);
+  EXPECT_EQ(kv(lines[4], "state"), "bus_off");
+  EXPECT_EQ(kv(lines[4], "bus_off"), "1");
+}
+
+TEST(ConsoleCommands, AnchorsListsEverySiteAnchorWithItsCounters) {
+  const dataset::Recording& rec = sim_recording();
+  ConsoleRig rig(rec);
+  rig.run_s(20.0);
+  const auto lines = reply_lines(rig.command("anchors"));
+  ASSERT_EQ(lines.size(), rec.site.num_anchors + 1);
+  EXPECT_EQ(kv(lines[0], "count"), std::to_string(rec.site.num_anchors));
+  for (size_t i = 0; i < rec.site.num_anchors; ++i) {
+    const std::string& l = lines[i + 1];
+    const AnchorStatus& a = rig.app.navigator().anchor_status(i);
+    EXPECT_EQ(kv(l, "id"), std::to_string(a.anchor_id));
+    EXPECT_TRUE(kv(l, "state") == "los" || kv(l, "state") == "nlos") << l;
+    EXPECT_EQ(kv(l, "los"), std::to_string(a.los_count));
+    EXPECT_EQ(kv(l, "nlos"), std::to_string(a.nlos_count));
+    EXPECT_GT(kv_num(l, "range_m"), 0.0);
+    EXPECT_LE(kv_num(l, "age_ms"), 2000.0);
+  }
+}
+
+TEST(ConsoleCommands, EkfPrintsStateAndDiagonalAndVerboseStreamsTheFullCovarianceOverSeveralCycles) {
+  // Sensors stop after 10 s, so the covariance holds still while the reply is paced out.
+  dataset::Recording rec = sim_recording();
+  const uint64_t t_end = testing::first_cycle_us(rec) + 10000000U;
+  rec.imu.erase(std::remove_if(rec.imu.begin(), rec.imu.end(), [&](const ImuSample& s) { return s.t_us > t_end; }),
+                rec.imu.end());
+  rec.uwb.erase(std::remove_if(rec.uwb.begin(), rec.uwb.end(),
+                               [&](const dataset::UwbRow& r) { return r.range.t_us > t_end; }),
+                rec.uwb.end());
+  ConsoleRig rig(rec);
+  rig.run_s(11.0);
+  const auto brief = reply_lines(rig.command("ekf"));
+  ASSERT_EQ(brief.size(), 2U);
+  EXPECT_EQ(brief[0].rfind("ekf state p_m=", 0), 0U);
+  EXPECT_EQ(brief[1].rfind("ekf pdiag p_m2=", 0), 0U);
+
+  uint64_t ticks = 0;
+  const auto full = reply_lines(rig.command("ekf -v", &ticks));
+  ASSERT_EQ(full.size(), 2U + Navigator::kErrorStateSize);
+  for (size_t r = 0; r < Navigator::kErrorStateSize; ++r) {
+    const std::string& l = full[2 + r];
+    EXPECT_EQ(kv(l, "row"), std::to_string(r));
+    const std::string v = kv(l, "v");
+    std::vector<double> row;
+    for (size_t p = 0; p != std::string::npos && p <= v.size();) {
+      row.push_back(std::strtod(v.c_str() + p, nullptr));
+      const size_t c = v.find(',', p);
+      p = c == std::string::npos ? c : c + 1;
+    }
+    ASSERT_EQ(row.size(), Navigator::kErrorStateSize) << l;
+    // The diagonal printed here is the navigator's (3 significant digits).
+    const double want = static_cast<double>(rig.app.navigator().covariance(r, r));
+    EXPECT_NEAR(row[r], want, std::fabs(want) * 1e-2) << l;
+  }
+  EXPECT_GT(ticks, 1U) << "the 15x15 covariance exceeds one cycle's TX budget and must be paced";
+  EXPECT_LE(rig.app.console().stats().max_tx_per_poll, Console::kTxBytesPerPoll);
+  EXPECT_EQ(rig.app.console().stats().dropped_bytes, 0U);
+}
+
+TEST(ConsoleCommands, ParamListShowsEveryParameterWithBounds) {
+  ConsoleRig rig(sim_recording());
+  const auto lines = reply_lines(rig.command("param list"));
+  ASSERT_EQ(lines.size(), kNumParams + 1);
+  EXPECT_EQ(kv(lines[0], "count"), std::to_string(kNumParams));
+  for (size_t i = 0; i < kNumParams; ++i) {
+    EXPECT_EQ(kv(lines[i + 1], "name"), kParamDefs[i].name);
+    EXPECT_FALSE(kv(lines[i + 1], "min").empty());
+    EXPECT_FALSE(kv(lines[i + 1], "max").empty());
+  }
+}
+
+TEST(ConsoleCommands, ParamGetAndSetApplyLiveAndReplyWithOldAndNewValue) {
+  ConsoleRig rig(sim_recording());
+  auto lines = reply_lines(rig.command("param get gate.innov_sigma"));
+  ASSERT_EQ(lines.size(), 1U);
+  EXPECT_EQ(kv(lines[0], "value"), "5");
+  EXPECT_NE(lines[0].find("doc=\""), std::string::npos);
+
+  lines = reply_lines(rig.command("param set gate.innov_sigma 7.5"));
+  ASSERT_EQ(lines.size(), 1U);
+  EXPECT_EQ(lines[0], "param name=gate.innov_sigma value=7.5 old=5");
+  EXPECT_EQ(rig.app.params().get(ParamId::kGateInnovSigma), 7.5F);
+
+  lines = reply_lines(rig.command("param reset gate.innov_sigma"));
+  EXPECT_EQ(lines.at(0), "param name=gate.innov_sigma value=5 old=7.5");
+  EXPECT_EQ(rig.app.params().get(ParamId::kGateInnovSigma), 5.0F);
+}
+
+TEST(ConsoleCommands, SettingAParameterChangesValidationOfTheNextFrames) {
+  ConsoleRig rig(sim_recording());
+  rig.run_s(2.0);
+  (void)rig.command("param set uwb.max_range 1");
+  const uint32_t accepted = rig.app.stats().uwb.accepted;
+  const uint32_t out_of_range = rig.app.stats().uwb.rejected[static_cast<size_t>(RejectReason::kOutOfRange)];
+  rig.run_s(2.0);
+  EXPECT_EQ(rig.app.stats().uwb.accepted, accepted);
+  EXPECT_GT(rig.app.stats().uwb.rejected[static_cast<size_t>(RejectReason::kOutOfRange)], out_of_range + 50);
+}
+
+TEST(ConsoleCommands, BadParamValuesAreRejectedWithOneErrorLineAndLeaveTheParameterUnchanged) {
+  ConsoleRig rig(sim_recording());
+  const Params before = rig.app.params();
+  for (const char* cmd : {"param set in.drop_repeated 2", "param set in.drop_repeated -1", "param set uwb.sigma 0",
+                          "param set uwb.sigma 1e9", "param set uwb.sigma nan", "param set uwb.sigma inf",
+                          "param set uwb.sigma 0.5x", "param set uwb.sigma abc", "param set uwb.sigma",
+                          "param set no.such 1", "param get no.such", "param reset no.such", "param frobnicate",
+                          "param", "param set uwb.sigma 0.2 extra"}) {
+    const auto lines = reply_lines(rig.command(cmd));
+    ASSERT_EQ(lines.size(), 1U) << cmd;
+    EXPECT_EQ(lines[0].rfind("error: param: ", 0), 0U) << cmd << " -> " << lines[0];
+    EXPECT_TRUE(params_equal(rig.app.params(), before)) << cmd;
+  }
+  const auto lines = reply_lines(rig.command("param set in.drop_repeated 2"));
+  EXPECT_EQ(lines.at(0), "error: param: in.drop_repeated=2 out of range [0, 1]; unchanged");
+}
+
+TEST(ConsoleCommands, ParamSaveAndLoadGoThroughTheParameterStore) {
+  const std::string path = (std::filesystem::temp_directory_path() / "uwbnav_console_params.bin").string();
+  std::filesystem::remove(path);
+  hal::FileParamStore store(path);
+  ConsoleRig rig(sim_recording(), &store);
+  EXPECT_EQ(reply_lines(rig.command("param load")).at(0), "error: param: load failed (empty); values unchanged");
+  (void)rig.command("param set gate.innov_sigma 9");
+  EXPECT_EQ(reply_lines(rig.command("param save")).at(0), "param saved=ok count=" + std::to_string(kNumParams));
+  EXPECT_TRUE(std::filesystem::exists(path));
+  (void)rig.command("param set gate.innov_sigma 3");
+  EXPECT_EQ(reply_lines(rig.command("param load")).at(0), "param loaded=ok count=" + std::to_string(kNumParams));
+  EXPECT_EQ(rig.app.params().get(ParamId::kGateInnovSigma), 9.0F);
+  // Reset of all parameters returns to the table defaults.
+  EXPECT_EQ(reply_lines(rig.command("param reset")).at(0), "param reset=all count=" + std::to_string(kNumParams));
+  EXPECT_EQ(rig.app.params().get(ParamId::kGateInnovSigma), 5.0F);
+  std::filesystem::remove(path);
+}
+
+TEST(ConsoleCommands, ParamSaveOnABoardWithoutStoreSaysSo) {
+  ConsoleRig rig(sim_recording());
+  EXPECT_EQ(reply_lines(rig.command("param save")).at(0), "error: param: save failed (unsupported)");
+}
+
+TEST(ConsoleCommands, LogLevelShowsAndSetsTheThresholdThroughTheParameter) {
+  ConsoleRig rig(sim_recording());
+  EXPECT_EQ(kv(reply_lines(rig.command("log level")).at(0), "level"), "info");
+  EXPECT_EQ(kv(reply_lines(rig.command("log level debug")).at(0), "level"), "debug");
+  EXPECT_EQ(rig.app.params().get(ParamId::kConsoleLogLevel), 3.0F);
+  EXPECT_EQ(logger().level(), LogLevel::kDebug);
+  EXPECT_EQ(reply_lines(rig.command("log level loud")).at(0), "error: log: unknown level 'loud' (error|warn|info|debug)");
+  EXPECT_EQ(reply_lines(rig.command("log")).at(0).rfind("error: log: usage", 0), 0U);
+  EXPECT_EQ(logger().level(), LogLevel::kDebug);
+}
+
+TEST(ConsoleCommands, LogLinesFromTheFirmwareReachTheConsole) {
+  ConsoleRig rig(sim_recording());
+  const auto lines = reply_lines(rig.command("param set gate.innov_sigma 6"));
+  const auto logs = lines_with_prefix(lines, "log ");
+  ASSERT_EQ(logs.size(), 1U);
+  EXPECT_EQ(kv(logs[0], "level"), "info");
+  EXPECT_EQ(kv(logs[0], "mod"), "console");
+  (void)rig.command("log level warn");
+  EXPECT_TRUE(lines_with_prefix(reply_lines(rig.command("param set gate.innov_sigma 7")), "log ").empty());
+}
+
+TEST(ConsoleCommands, StreamPosEmitsAtTheRequestedRateUntilStopped) {
+  ConsoleRig rig(sim_recording());
+  auto lines = reply_lines(rig.command("stream pos 10"));
+  EXPECT_EQ(lines.at(0), "stream pos_hz=10 stats_hz=0 anchors_hz=0");
+  rig.serial.output.clear();
+  rig.run_s(2.0);
+  const auto pos = lines_with_prefix(testing::split_lines(rig.serial.output), "$pos ");
+  EXPECT_GE(pos.size(), 19U);
+  EXPECT_LE(pos.size(), 21U);
+  EXPECT_FALSE(kv(pos.back(), "x_m").empty());
+  EXPECT_FALSE(kv(pos.back(), "mode").empty());
+
+  (void)rig.command("stream stats 5");
+  (void)rig.command("stream anchors 1");
+  rig.serial.output.clear();
+  rig.run_s(1.0);
+  const auto out = testing::split_lines(rig.serial.output);
+  EXPECT_GE(lines_with_prefix(out, "$stats ").size(), 4U);
+  EXPECT_GE(lines_with_prefix(out, "$anchor ").size(), sim_recording().site.num_anchors);
+
+  lines = reply_lines(rig.command("stream off"));
+  EXPECT_EQ(lines_with_prefix(lines, "stream ").at(0), "stream pos_hz=0 stats_hz=0 anchors_hz=0");
+  rig.serial.output.clear();
+  rig.run_s(1.0);
+  EXPECT_EQ(rig.serial.output, "");
+}
+
+TEST(ConsoleCommands, StreamRejectsUnknownStreamsAndRates) {
+  ConsoleRig rig(sim_recording());
+  EXPECT_EQ(reply_lines(rig.command("stream gps 10")).at(0), "error: stream: unknown stream 'gps' (pos|stats|anchors)");
+  EXPECT_EQ(reply_lines(rig.command("stream pos 1000")).at(0), "error: stream: rate '1000' not in 0..100 Hz (or off)");
+  EXPECT_EQ(reply_lines(rig.command("stream pos -5")).at(0), "error: stream: rate '-5' not in 0..100 Hz (or off)");
+  EXPECT_EQ(reply_lines(rig.command("stream pos")).at(0), "error: stream: usage: stream [pos|stats|anchors RATE_HZ|off]");
+  EXPECT_EQ(rig.app.console().stream_rate_hz(StreamKind::kPos), 0U);
+}
+
+TEST(ConsoleCommands, ResetStatsZeroesTheCountersAndResetFilterRestartsTheEstimator) {
+  ConsoleRig rig(sim_recording());
+  rig.run_s(15.0);
+  ASSERT_GT(rig.app.stats().uwb.received, 0U);
+  EXPECT_EQ(reply_lines(rig.command("reset stats")).at(0), "reset stats=ok");
+  EXPECT_LT(rig.app.stats().uwb.received, 5U);  // the cycles after the reset only
+  ASSERT_NE(rig.app.last_output().status, NavStatus::kInitialising);
+  const auto lines = reply_lines(rig.command("reset filter"));
+  EXPECT_EQ(lines_with_prefix(lines, "reset ").at(0), "reset filter=ok");
+  rig.tick();  // the output of the cycle after the reset
+  EXPECT_EQ(rig.app.last_output().status, NavStatus::kInitialising);
+  EXPECT_EQ(reply_lines(rig.command("reset everything")).at(0), "error: reset: usage: reset filter|stats");
+}
+
+TEST(ConsoleCommands, HistoryListsAndBangBangRepeats) {
+  ConsoleRig rig(sim_recording());
+  (void)rig.command("version");
+  (void)rig.command("log level");
+  auto lines = reply_lines(rig.command("history"));
+  ASSERT_EQ(lines.size(), 4U);
+  EXPECT_EQ(lines[0], "history count=3");
+  EXPECT_EQ(lines[1], "history n=1 line=version");
+  EXPECT_EQ(lines[3], "history n=3 line=history");
+  lines = reply_lines(rig.command("!1"));
+  EXPECT_EQ(lines.at(0).rfind("version fw=", 0), 0U);
+  lines = reply_lines(rig.command("!!"));
+  EXPECT_EQ(lines.at(0).rfind("version fw=", 0), 0U);
+  EXPECT_EQ(reply_lines(rig.command("!99")).at(0), "error: history: no entry '!99' (see history)");
+  // Cursor-up recalls the previous line as if typed.
+  lines = reply_lines(rig.command("\x1b[A"));
+  EXPECT_EQ(lines_with_prefix(lines, "version fw=").size(), 1U);
+}
+
+TEST(ConsoleCommands, UnknownCommandsAndWrongArgumentsGetOneErrorLine) {
+  ConsoleRig rig(sim_recording());
+  EXPECT_EQ(reply_lines(rig.command("frobnicate")).at(0), "error: unknown command 'frobnicate' (try help)");
+  EXPECT_EQ(reply_lines(rig.command("status now")).at(0), "error: status: takes no arguments");
+  EXPECT_EQ(reply_lines(rig.command("ekf -x")).at(0), "error: ekf: usage: ekf [-v]");
+  EXPECT_EQ(reply_lines(rig.command("a b c d e f g h i")).at(0), "error: too many arguments (max 8 words)");
+  EXPECT_EQ(reply_lines(rig.command("echo maybe")).at(0), "error: echo: usage: echo [on|off]");
+  // An empty line just gives the prompt back.
+  EXPECT_EQ(rig.command(""), "\r\n> ");
+  EXPECT_EQ(rig.app.console().stats().errors, 5U);
+}
+
+TEST(ConsoleCommands, OverlongLineAndBinaryGarbageGetOneErrorLineEach) {
+  ConsoleRig rig(sim_recording());
+  const Params before = rig.app.params();
+  auto lines = reply_lines(rig.command("param set uwb.sigma 0.3 " + std::string(300, 'x')));
+  ASSERT_EQ(lines.size(), 1U);
+  EXPECT_EQ(lines[0], "error: line too long (324 bytes, max 127), ignored");
+  lines = testing::split_lines(rig.command(std::string("param set uwb.sigma 0.3\x01\xff", 25)));
+  ASSERT_EQ(lines.size(), 2U);
+  EXPECT_EQ(lines[1], "error: non-printable input (2 bytes), line ignored");
+  EXPECT_TRUE(params_equal(rig.app.params(), before));
+}
+
+TEST(ConsoleCommands, RandomBytesNeverCrashNeverChangeParametersAndTheShellStillAnswers) {
+  ConsoleRig rig(sim_recording());
+  const Params before = rig.app.params();
+  std::mt19937 rng(12345);
+  std::string junk;
+  for (int i = 0; i < 200000; ++i) junk.push_back(static_cast<char>(rng() & 0xFF));
+  rig.serial.type(junk);
+  while (rig.serial.pending_input() > 0) rig.tick();
+  rig.run_s(1.0);
+  EXPECT_TRUE(params_equal(rig.app.params(), before));
+  EXPECT_GT(rig.app.console().stats().errors, 0U);
+  EXPECT_LE(rig.app.console().stats().max_rx_per_poll, Console::kRxBytesPerPoll);
+  EXPECT_LE(rig.app.console().stats().max_commands_per_poll, 1U);
+  // Ctrl-C clears whatever partial line the junk left behind.
+  const auto lines = reply_lines(rig.command("\x03version"));
+  EXPECT_EQ(lines_with_prefix(lines, "version fw=").size(), 1U);
+}
+
+TEST(ConsoleCommands, EchoOffSilencesEchoAndPrompt) {
+  ConsoleRig rig(sim_recording());
+  rig.serial.type("echo off\r");
+  rig.run_s(0.05);
+  EXPECT_EQ(testing::split_lines(rig.serial.output).back(), "echo off");
+  rig.serial.output.clear();
+  rig.serial.type("version\r");
+  rig.run_s(0.05);
+  const auto lines = testing::split_lines(rig.serial.output);
+  ASSERT_EQ(lines.size(), 1U);
+  EXPECT_EQ(lines[0].rfind("version fw=", 0), 0U);
+  EXPECT_EQ(rig.serial.output.find("> "), std::string::npos);
+}
+
+}  // namespace
+}  // namespace uwbnav

@@ -1,0 +1,387 @@
+// Format v1 reader on malformed input: every bad-row kind skipped, counted and
+// warned with its line, and no input (garbage, CRLF, empty, huge) crashes it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <string>
+
+#include "tests/dataset/dataset_test_util.hpp"
+#include "tools/dataset/recording.hpp"
+
+namespace uwbnav::dataset {
+namespace {
+
+using testutil::dump;
+using testutil::has_warning;
+using testutil::kAnchorsOk;
+using testutil::scratch_dir;
+using testutil::write_file;
+
+TEST(DatasetReader, SkipsEachBadRowKindWithItsLineNumber) {
+  const std::string dir = scratch_dir();
+  write_file(dir + "/anchors.csv", kAnchorsOk);
+  write_file(dir + "/uwb.csv",
+             "t_s,anchor_id,range_m,tag_id,nlos,fp_power_dbm,rx_power_dbm\n"  // 1
+             "0.1,1,5.0,0,0,-80,-79\n"                                        // 2 ok
+             "# a comment\n"                                                  // 3
+             "0.2,1,abc,0,0,,\n"                                              // 4 unparsable
+             "0.3,1,nan,0,0,,\n"                                              // 5 NaN
+             "0.3,1,inf,,,,\n"                                                // 6 Inf
+             "0.4,1,5.0\n"                                                    // 7 column count
+             "0.05,1,5.0,0,,,\n"                                              // 8 backwards
+             "0.5,-1,5.0,0,,,\n"                                              // 9 negative id
+             "0.5,70000,5.0,0,,,\n"                                           // 10 id overflow
+             "-0.1,1,5.0,0,,,\n"                                              // 11 t_s < 0
+             "0.5,1,5.0,0,2,,\n"                                              // 12 nlos not 0/1
+             "0.5,1,5.0,256,,,\n"                                             // 13 tag id overflow
+             "0.5,1,1e39,0,,,\n"                                              // 14 float overflow
+             "0.5,99999999999999999999999,5.0,0,,,\n"                         // 15 uint64 overflow
+             "0.5,2,6.5,1,,-81.5,\n"                                          // 16 ok
+             "0.5,3,7.0,,,,\n");                                              // 17 ok, tie in time
+  Recording rec;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << dump(rep);
+  ASSERT_EQ(rec.uwb.size(), 3U) << dump(rep);
+  EXPECT_EQ(rep.rows_skipped, 12U) << dump(rep);
+  EXPECT_EQ(rep.rows_read, 3U + 3U);  // anchors + ranges
+  EXPECT_TRUE(has_warning(rep, "uwb.csv:4:", "unparsable")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "uwb.csv:5:", "not finite")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "uwb.csv:6:", "not finite")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "uwb.csv:7:", "expected 7 columns, got 3")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "uwb.csv:8:", "backwards")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "uwb.csv:9:", "negative")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "uwb.csv:10:", "out of range")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "uwb.csv:11:", "negative time")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "uwb.csv:12:", "nlos")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "uwb.csv:13:", "tag_id")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "uwb.csv:14:", "float range")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "uwb.csv:15:", "out of range")) << dump(rep);
+
+  EXPECT_EQ(rec.uwb[0].range.t_us, 100000U);
+  EXPECT_EQ(rec.uwb[0].nlos_label, 0);
+  EXPECT_FLOAT_EQ(rec.uwb[0].range.rx_power_dbm, -79.0F);
+  EXPECT_EQ(rec.uwb[1].range.tag_id, 1);
+  EXPECT_EQ(rec.uwb[1].nlos_label, -1);
+  EXPECT_FLOAT_EQ(rec.uwb[1].range.fp_power_dbm, -81.5F);
+  EXPECT_TRUE(std::isnan(rec.uwb[1].range.rx_power_dbm));
+  EXPECT_EQ(rec.uwb[2].range.t_us, rec.uwb[1].range.t_us);
+  EXPECT_EQ(rec.uwb[2].range.tag_id, 0);  // empty tag_id means 0
+}
+
+TEST(DatasetReader, SkipsBadImuAndTruthRows) {
+  const std::string dir = scratch_dir();
+  write_file(dir + "/anchors.csv", kAnchorsOk);
+  write_file(dir + "/uwb.csv", "t_s,anchor_id,range_m\n");
+  write_file(dir + "/imu.csv",
+             "t_s,ax_mps2,ay_mps2,az_mps2,gx_radps,gy_radps,gz_radps\n"
+             "0.00,0,0,9.81,0,0,0\n"
+             "0.01,0,0,,0,0,0\n"  // 3 empty required cell
+             "0.02,0,0,9.81,0,0,0,7\n"  // 4 column count
+             "0.03,0,0,9.81,0,0,0\n");
+  write_file(dir + "/truth.csv",
+             "t_s,x_m,y_m,z_m,qw,qx,qy,qz\n"
+             "0.0,1,2,3,1,0,0,0\n"
+             "0.1,1,2,3,,,,\n"     // no attitude: fine
+             "0.2,1,2,3,1,0,,\n"   // 4 partial quaternion
+             "0.3,1,2,INF,1,0,0,0\n");  // 5 Inf
+  Recording rec;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << dump(rep);
+  EXPECT_EQ(rec.imu.size(), 2U);
+  EXPECT_TRUE(rec.site.has_imu);
+  EXPECT_EQ(rec.truth.size(), 2U);
+  EXPECT_TRUE(rec.truth[0].has_attitude);
+  EXPECT_FALSE(rec.truth[1].has_attitude);
+  EXPECT_EQ(rep.rows_skipped, 4U);
+  EXPECT_TRUE(has_warning(rep, "imu.csv:3:", "az_mps2: empty")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "imu.csv:4:", "columns")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "truth.csv:4:", "quaternion")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "truth.csv:5:", "not finite")) << dump(rep);
+}
+
+TEST(DatasetReader, CrlfAndMissingFinalNewlineReadLikeLf) {
+  const std::string uwb_lf =
+      "t_s,anchor_id,range_m,tag_id,nlos\n# comment\n0.1,1,5.0,0,1\n0.2,2,6.0,0,0\n0.3,3,7.0,0,\n";
+  std::string uwb_crlf;
+  for (char c : uwb_lf) {
+    if (c == '\n') uwb_crlf += '\r';
+    uwb_crlf += c;
+  }
+  uwb_crlf.erase(uwb_crlf.size() - 2);  // no final line break
+
+  const std::string root = scratch_dir();
+  const std::string dir_lf = root + "/lf";
+  const std::string dir_crlf = root + "/crlf";
+  for (const auto& [dir, uwb] : {std::pair{dir_lf, uwb_lf}, std::pair{dir_crlf, uwb_crlf}}) {
+    std::filesystem::create_directories(dir);
+    write_file(dir + "/anchors.csv", dir == dir_lf ? std::string(kAnchorsOk)
+                                                   : std::string("anchor_id,x_m,y_m,z_m\r\n1,0,0,2\r\n"
+                                                                 "2,10,0,2\r\n3,10,10,2"));
+    write_file(dir + "/uwb.csv", uwb);
+  }
+  Recording a;
+  Recording b;
+  ReadReport ra;
+  ReadReport rb;
+  ASSERT_EQ(read_recording(dir_lf, a, ra), Status::kOk) << dump(ra);
+  ASSERT_EQ(read_recording(dir_crlf, b, rb), Status::kOk) << dump(rb);
+  EXPECT_EQ(rb.rows_skipped, 0U) << dump(rb);
+  ASSERT_EQ(a.uwb.size(), 3U);
+  ASSERT_EQ(b.uwb.size(), a.uwb.size());
+  ASSERT_EQ(b.site.num_anchors, 3U);
+  for (size_t i = 0; i < a.uwb.size(); ++i) {
+    EXPECT_EQ(a.uwb[i].range.t_us, b.uwb[i].range.t_us);
+    EXPECT_EQ(a.uwb[i].range.range_m, b.uwb[i].range.range_m);
+    EXPECT_EQ(a.uwb[i].nlos_label, b.uwb[i].nlos_label);
+  }
+  EXPECT_EQ(b.uwb[2].nlos_label, -1);
+}
+
+TEST(DatasetReader, GarbageBytesNeverCrashAndWarningsAreCapped) {
+  const std::string dir = scratch_dir();
+  write_file(dir + "/anchors.csv", kAnchorsOk);
+  std::string garbage = "t_s,anchor_id,range_m\n";
+  uint32_t x = 12345U;  // xorshift32: deterministic bytes incl. NUL, '\n', ',', '\r', 0xFF
+  for (size_t i = 0; i < 200000; ++i) {
+    x ^= x << 13;
+    x ^= x >> 17;
+    x ^= x << 5;
+    garbage.push_back(static_cast<char>(x & 0xFFU));
+  }
+  write_file(dir + "/uwb.csv", garbage);
+  Recording rec;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << rep.error;
+  EXPECT_GT(rep.rows_skipped, ReadReport::kMaxWarnings);
+  EXPECT_EQ(rep.warnings.size(), ReadReport::kMaxWarnings);
+  EXPECT_EQ(rep.warnings.size() + rep.warnings_dropped, rep.rows_skipped);
+  for (const auto& r : rec.uwb) EXPECT_TRUE(std::isfinite(r.range.range_m));
+
+  // Garbage in every file, header included: an error or a load, never a crash.
+  for (uint32_t seed = 1; seed <= 40; ++seed) {
+    for (const char* f : {"anchors.csv", "uwb.csv", "imu.csv", "truth.csv", "tags.csv", "meta.ini"}) {
+      std::string bytes = seed % 2 == 0 ? std::string(kAnchorsOk).substr(0, 22) : std::string();
+      x = seed * 7919U + static_cast<uint32_t>(bytes.size());
+      for (size_t i = 0; i < 3000; ++i) {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        bytes.push_back(static_cast<char>(x % 7 == 0 ? '\n' : x % 5 == 0 ? ',' : (x >> 8) & 0xFFU));
+      }
+      write_file(dir + "/" + f, bytes);
+    }
+    Recording r2;
+    ReadReport rep2;
+    const Status st = read_recording(dir, r2, rep2);
+    if (st != Status::kOk) {
+      EXPECT_FALSE(rep2.error.empty());
+    }
+  }
+}
+
+TEST(DatasetReader, HugeLineIsSkippedNotFatal) {
+  const std::string dir = scratch_dir();
+  write_file(dir + "/anchors.csv", kAnchorsOk);
+  std::string uwb = "t_s,anchor_id,range_m\n0.1,1,";
+  uwb.append(8U << 20, '7');  // an 8 MB number
+  uwb += "\n0.2,1,5.5\n";
+  write_file(dir + "/uwb.csv", uwb);
+  Recording rec;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << rep.error;
+  EXPECT_EQ(rep.rows_skipped, 1U);
+  EXPECT_TRUE(has_warning(rep, "uwb.csv:2:", "range_m")) << dump(rep);
+  ASSERT_EQ(rec.uwb.size(), 1U);
+  EXPECT_EQ(rec.uwb[0].range.range_m, 5.5F);
+}
+
+TEST(DatasetReader, EmptyFilesFailWhenRequiredAndAreIgnoredWhenOptional) {
+  const std::string dir = scratch_dir();
+  write_file(dir + "/anchors.csv", kAnchorsOk);
+  write_file(dir + "/uwb.csv", "");
+  Recording rec;
+  ReadReport rep;
+  EXPECT_EQ(read_recording(dir, rec, rep), Status::kInvalidArgument);
+  EXPECT_NE(rep.error.find("uwb.csv"), std::string::npos) << rep.error;
+  EXPECT_NE(rep.error.find("no header"), std::string::npos) << rep.error;
+
+  write_file(dir + "/uwb.csv", "# only a comment\n\n");
+  rep = ReadReport{};
+  EXPECT_EQ(read_recording(dir, rec, rep), Status::kInvalidArgument);
+
+  write_file(dir + "/uwb.csv", "t_s,anchor_id,range_m\n");
+  write_file(dir + "/imu.csv", "");
+  write_file(dir + "/truth.csv", "");
+  rep = ReadReport{};
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << rep.error;
+  EXPECT_TRUE(rec.uwb.empty());
+  EXPECT_FALSE(rec.site.has_imu);
+  EXPECT_TRUE(has_warning(rep, "imu.csv:", "no header")) << dump(rep);
+
+  write_file(dir + "/imu.csv", "t_s,ax_mps2,ay_mps2,az_mps2,gx_radps,gy_radps,gz_radps\n");
+  rep = ReadReport{};
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << rep.error;
+  EXPECT_FALSE(rec.site.has_imu) << "imu.csv without rows is a UWB-only recording";
+
+  write_file(dir + "/anchors.csv", "");
+  rep = ReadReport{};
+  EXPECT_EQ(read_recording(dir, rec, rep), Status::kInvalidArgument);
+  EXPECT_NE(rep.error.find("anchors.csv"), std::string::npos) << rep.error;
+
+  write_file(dir + "/anchors.csv", "anchor_id,x_m,y_m,z_m\n1,nan,0,0\n");
+  rep = ReadReport{};
+  EXPECT_EQ(read_recording(dir, rec, rep), Status::kInvalidArgument);
+  EXPECT_NE(rep.error.find("no usable anchor"), std::string::npos) << rep.error;
+}
+
+TEST(DatasetReader, MissingRequiredFilesFailWithTheirName) {
+  const std::string dir = scratch_dir();
+  Recording rec;
+  ReadReport rep;
+  EXPECT_EQ(read_recording(dir + "/does_not_exist", rec, rep), Status::kNotFound);
+  EXPECT_NE(rep.error.find("anchors.csv"), std::string::npos) << rep.error;
+
+  write_file(dir + "/anchors.csv", kAnchorsOk);
+  rep = ReadReport{};
+  EXPECT_EQ(read_recording(dir, rec, rep), Status::kNotFound);
+  EXPECT_NE(rep.error.find("uwb.csv"), std::string::npos) << rep.error;
+
+  write_file(dir + "/uwb.csv", "t_s,anchor_id,range_m\n1.0,1,3.0\n");
+  std::filesystem::remove(dir + "/anchors.csv");
+  rep = ReadReport{};
+  EXPECT_EQ(read_recording(dir, rec, rep), Status::kNotFound);
+  EXPECT_NE(rep.error.find("anchors.csv"), std::string::npos) << rep.error;
+}
+
+TEST(DatasetReader, WrongHeadersAreRejectedWithAClearError) {
+  const std::string dir = scratch_dir();
+  write_file(dir + "/anchors.csv", kAnchorsOk);
+  struct Case {
+    const char* file;
+    const char* header;
+  };
+  const Case bad[] = {
+      {"uwb.csv", "t_s,range_m,anchor_id\n"},                 // order
+      {"uwb.csv", "t_s,anchor_id,range_m,nlos\n"},            // optional column skipped
+      {"uwb.csv", "time,anchor_id,range_m\n"},                // name
+      {"uwb.csv", "t_s,anchor_id,range_m,tag_id,nlos,fp_power_dbm,rx_power_dbm,extra\n"},
+      {"imu.csv", "t_s,ax_mps2,ay_mps2,az_mps2,gx_radps,gy_radps\n"},
+      {"truth.csv", "t_s,x_m,y_m,z_m,qw,qx\n"},               // partial quaternion group
+      {"tags.csv", "tag_id,x,y,z\n"},
+  };
+  for (const Case& c : bad) {
+    write_file(dir + "/uwb.csv", "t_s,anchor_id,range_m\n");
+    for (const char* f : {"imu.csv", "truth.csv", "tags.csv"}) std::filesystem::remove(dir + "/" + f);
+    write_file(dir + "/" + c.file, c.header);
+    Recording rec;
+    ReadReport rep;
+    EXPECT_EQ(read_recording(dir, rec, rep), Status::kInvalidArgument) << c.file << " " << c.header;
+    EXPECT_EQ(rep.error.rfind(std::string(c.file) + ":1: wrong header", 0), 0U) << rep.error;
+    EXPECT_NE(rep.error.find("expected"), std::string::npos) << rep.error;
+  }
+
+  // Accepted: comments before the header, a BOM, and any leading part of the optional columns.
+  std::filesystem::remove(dir + "/tags.csv");
+  write_file(dir + "/uwb.csv", "\xEF\xBB\xBF# made by hand\nt_s,anchor_id,range_m,tag_id\n0.5,1,2.5,3\n");
+  write_file(dir + "/truth.csv", "t_s,x_m,y_m,z_m\n0.5,1,2,3\n");
+  Recording rec;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << rep.error;
+  ASSERT_EQ(rec.uwb.size(), 1U);
+  EXPECT_EQ(rec.uwb[0].range.tag_id, 3);
+  EXPECT_TRUE(std::isnan(rec.uwb[0].range.fp_power_dbm));
+  EXPECT_EQ(rec.truth.size(), 1U);
+}
+
+TEST(DatasetReader, AnchorAndTagCapacityOverflowIsWarnedNotOverrun) {
+  const std::string dir = scratch_dir();
+  std::string anchors = "anchor_id,x_m,y_m,z_m\n";
+  for (int i = 0; i < 20; ++i) anchors += std::to_string(100 + i) + ",1,2,3\n";
+  anchors += "100,5,5,5\n";  // duplicate id
+  write_file(dir + "/anchors.csv", anchors);
+  std::string tags = "tag_id,x_m,y_m,z_m\n";
+  for (int i = 0; i < 6; ++i) tags += std::to_string(i) + ",0.1,0,1\n";
+  write_file(dir + "/tags.csv", tags);
+  write_file(dir + "/uwb.csv", "t_s,anchor_id,range_m\n");
+  Recording rec;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << rep.error;
+  EXPECT_EQ(rec.site.num_anchors, kMaxAnchors);
+  EXPECT_EQ(static_cast<size_t>(rec.site.anchors[kMaxAnchors - 1].id), 100 + kMaxAnchors - 1);
+  EXPECT_EQ(rec.site.num_tags, kMaxTags);
+  EXPECT_EQ(rep.rows_skipped, (20 - kMaxAnchors) + 1 + (6 - kMaxTags));
+  EXPECT_TRUE(has_warning(rep, "anchors.csv:18:", "more than 16 anchors")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "anchors.csv:22:", "duplicate anchor_id 100")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "tags.csv:6:", "more than 4 tags")) << dump(rep);
+}
+
+TEST(DatasetReader, AbsentTagsFileMeansTagZeroAtBodyOrigin) {
+  const std::string dir = scratch_dir();
+  write_file(dir + "/anchors.csv", kAnchorsOk);
+  write_file(dir + "/uwb.csv", "t_s,anchor_id,range_m\n");
+  Recording rec;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << rep.error;
+  ASSERT_EQ(rec.site.num_tags, 1U);
+  EXPECT_EQ(rec.site.tags[0].id, 0);
+  EXPECT_EQ(rec.site.tags[0].lever_body_m.x, 0.0F);
+  EXPECT_EQ(rec.site.tags[0].lever_body_m.z, 0.0F);
+  EXPECT_EQ(rec.name(), "DatasetReader.AbsentTagsFileMeansTagZeroAtBodyOrigin") << "name falls back to the folder";
+
+  write_file(dir + "/tags.csv", "tag_id,x_m,y_m,z_m\n7,0.5,-0.25,1.5\n");
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << rep.error;
+  ASSERT_EQ(rec.site.num_tags, 1U);
+  EXPECT_EQ(rec.site.tags[0].id, 7);
+  EXPECT_EQ(rec.site.tags[0].lever_body_m.y, -0.25F);
+}
+
+TEST(DatasetReader, MetaIniFillsSiteAndWarnsAboutBadLines) {
+  const std::string dir = scratch_dir();
+  write_file(dir + "/anchors.csv", kAnchorsOk);
+  write_file(dir + "/uwb.csv", "t_s,anchor_id,range_m\n");
+  write_file(dir + "/meta.ini",
+             "# comment\r\n"
+             "; another comment\r\n"
+             "name = drive 7\r\n"
+             "platform = air\r\n"
+             "gravity_mps2 = 9.79\r\n"
+             "uwb_sigma_m=0.25\r\n"
+             "this line has no equals sign\r\n"
+             "description = a = b\r\n");
+  Recording rec;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << rep.error;
+  EXPECT_EQ(rec.name(), "drive 7");
+  EXPECT_EQ(rec.site.platform, Platform::kAir);
+  EXPECT_EQ(rec.site.gravity_mps2, 9.79F);
+  EXPECT_EQ(rec.site.uwb_sigma_m, 0.25F);
+  EXPECT_EQ(rec.meta["description"], "a = b");
+  EXPECT_TRUE(has_warning(rep, "meta.ini:7:", "key = value")) << dump(rep);
+  EXPECT_EQ(rep.rows_skipped, 0U) << "meta.ini lines are not data rows";
+
+  write_file(dir + "/meta.ini", "platform = boat\ngravity_mps2 = -3\nuwb_sigma_m = x\n");
+  rep = ReadReport{};
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << rep.error;
+  EXPECT_EQ(rec.site.platform, Platform::kGround);
+  EXPECT_EQ(rec.site.gravity_mps2, SiteConfig{}.gravity_mps2);
+  EXPECT_EQ(rec.site.uwb_sigma_m, SiteConfig{}.uwb_sigma_m);
+  EXPECT_TRUE(has_warning(rep, "meta.ini:1:", "platform")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "meta.ini:2:", "gravity_mps2")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "meta.ini:3:", "uwb_sigma_m")) << dump(rep);
+}
+
+TEST(DatasetReader, SecondsToMicrosecondsRoundsToNearest) {
+  EXPECT_EQ(seconds_to_us(0.0), 0U);
+  EXPECT_EQ(seconds_to_us(1e-6), 1U);
+  EXPECT_EQ(seconds_to_us(0.0000014), 1U);
+  EXPECT_EQ(seconds_to_us(0.0000016), 2U);
+  EXPECT_EQ(seconds_to_us(1.5), 1500000U);
+  EXPECT_EQ(seconds_to_us(1723710007.350701), 1723710007350701U);
+  EXPECT_EQ(seconds_to_us(-1.0), 0U);
+  EXPECT_EQ(seconds_to_us(std::nan("")), 0U);
+  EXPECT_DOUBLE_EQ(us_to_seconds(1500000U), 1.5);
+}
+
+}  // namespace
+}  // namespace uwbnav::dataset

@@ -1,0 +1,231 @@
+// Protects the GatingLayer contract the Navigator relies on: policy selection
+// by parameter, the innovation chi-square gate (incl. non-finite), the seed 000
+// §1.3 epoch policy, seed 003 inflation, per-anchor hysteresis, the escape
+// from a drifted filter, counters, and SVM/consistency evidence in decisions.
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "estimator/nlos/gating_layer.hpp"
+
+namespace uwbnav {
+namespace {
+
+SiteConfig make_site() {
+  SiteConfig s;
+  EXPECT_TRUE(ok(s.add_anchor(1, Vec3f{0.0F, 0.0F, 0.2F})));
+  EXPECT_TRUE(ok(s.add_anchor(2, Vec3f{60.0F, 0.0F, 0.2F})));
+  EXPECT_TRUE(ok(s.add_anchor(3, Vec3f{60.0F, 40.0F, 0.2F})));
+  EXPECT_TRUE(ok(s.add_anchor(4, Vec3f{0.0F, 40.0F, 0.2F})));
+  EXPECT_TRUE(ok(s.add_tag(0, Vec3f{0.0F, 0.0F, 1.7F})));
+  return s;
+}
+
+Params params_with(GatingPolicy policy) {
+  Params p;
+  EXPECT_TRUE(ok(p.set(ParamId::kGatePolicy, static_cast<float>(policy))));
+  return p;
+}
+
+// A range of anchor index `a` at time t with a given innovation; filter converged,
+// vehicle static (speed 0, no travelled distance), predicted range 20 m.
+RangeContext ctx_at(int a, uint64_t t_us, float range_m, float innovation_m, bool ready = true) {
+  RangeContext c;
+  c.range.t_us = t_us;
+  c.range.anchor_id = static_cast<uint16_t>(a + 1);
+  c.range.range_m = range_m;
+  c.anchor_index = a;
+  c.predicted_range_m = range_m - innovation_m;
+  c.innovation_m = innovation_m;
+  c.meas_var_m2 = 0.01F;
+  c.innovation_var_m2 = 0.02F;
+  c.speed_mps = 0.0F;
+  c.dist_since_prev_m = 0.0F;
+  c.filter_ready = ready;
+  c.tag_pos_nav_m = Vec3f{20.0F, 15.0F, 1.7F};
+  return c;
+}
+
+TEST(GatingLayer, ConfigureVerifiesCommittedModels) {
+  GatingLayer g;
+  EXPECT_TRUE(ok(g.configure(make_site(), Params())));
+  EXPECT_EQ(g.policy(), GatingPolicy::kDefault);
+}
+
+TEST(GatingLayer, PolicyNoneFusesEverything) {
+  GatingLayer g;
+  ASSERT_TRUE(ok(g.configure(make_site(), params_with(GatingPolicy::kNone))));
+  const GatingDecision d = g.assess(ctx_at(0, 1000, 25.0F, 5.0F));
+  EXPECT_TRUE(d.use);
+  EXPECT_FALSE(d.nlos);
+  EXPECT_FLOAT_EQ(d.r_scale, 1.0F);
+}
+
+TEST(GatingLayer, InnovationGateInSigmas) {
+  GatingLayer g;
+  Params p = params_with(GatingPolicy::kInnovation);
+  ASSERT_TRUE(ok(p.set(ParamId::kGateInnovSigma, 3.0F)));
+  ASSERT_TRUE(ok(g.configure(make_site(), p)));
+  // sqrt(S) = 0.1414 m: 3 sigma = 0.424 m.
+  EXPECT_TRUE(g.assess(ctx_at(0, 1000, 20.4F, 0.40F)).use);
+  EXPECT_FALSE(g.assess(ctx_at(0, 2000, 20.45F, 0.45F)).use);
+  EXPECT_FALSE(g.assess(ctx_at(0, 3000, 20.0F, -0.45F)).use);
+  EXPECT_FALSE(g.assess(ctx_at(0, 4000, 20.0F, std::nanf(""))).use);
+  // No converged filter: nothing to test against, the range passes.
+  EXPECT_TRUE(g.assess(ctx_at(0, 5000, 30.0F, 10.0F, false)).use);
+}
+
+TEST(GatingLayer, ParameterChangeSwitchesPolicyLive) {
+  GatingLayer g;
+  ASSERT_TRUE(ok(g.configure(make_site(), params_with(GatingPolicy::kNone))));
+  EXPECT_TRUE(g.assess(ctx_at(0, 1000, 30.0F, 10.0F)).use);
+  g.update_params(params_with(GatingPolicy::kInnovation));
+  EXPECT_EQ(g.policy(), GatingPolicy::kInnovation);
+  EXPECT_FALSE(g.assess(ctx_at(0, 2000, 30.0F, 10.0F)).use);
+}
+
+TEST(GatingLayer, NonFiniteRangeOrUnknownAnchorIsRejected) {
+  GatingLayer g;
+  ASSERT_TRUE(ok(g.configure(make_site(), params_with(GatingPolicy::kNone))));
+  EXPECT_FALSE(g.assess(ctx_at(0, 1000, std::nanf(""), 0.0F)).use);
+  RangeContext c = ctx_at(0, 2000, 20.0F, 0.0F);
+  c.anchor_index = -1;
+  EXPECT_FALSE(g.assess(c).use);
+}
+
+TEST(GatingLayer, ResidualInflationScalesR) {
+  GatingLayer g;
+  ASSERT_TRUE(ok(g.configure(make_site(), params_with(GatingPolicy::kResidualInflation))));
+  const GatingDecision small = g.assess(ctx_at(0, 1000, 20.1F, 0.1F));
+  EXPECT_TRUE(small.use);
+  EXPECT_FLOAT_EQ(small.r_scale, 1.0F);
+  // z = 1.4142 / 0.14142 = 10 > Th = 3: e = 2 * 10 / 3.
+  const GatingDecision big = g.assess(ctx_at(1, 2000, 21.4142F, 1.4142F));
+  EXPECT_TRUE(big.use);
+  EXPECT_TRUE(big.nlos);
+  EXPECT_NEAR(big.r_scale, 20.0F / 3.0F, 1e-3F);
+}
+
+TEST(GatingLayer, ConsistencyEvidenceFromRangeJump) {
+  GatingLayer g;
+  ASSERT_TRUE(ok(g.configure(make_site(), params_with(GatingPolicy::kConsistency))));
+  EXPECT_TRUE(g.assess(ctx_at(0, 0, 20.0F, 0.0F)).use);  // first range: no Δρ yet
+  const GatingDecision d = g.assess(ctx_at(0, 80000, 21.5F, 1.5F));  // +1.5 m while static
+  EXPECT_TRUE(d.nlos);
+  EXPECT_FALSE(d.use);
+  EXPECT_FLOAT_EQ(d.p_mc, 0.9F);
+  const GatingDecision back = g.assess(ctx_at(0, 160000, 20.02F, 0.02F));
+  EXPECT_FLOAT_EQ(back.p_mc, 0.9F);  // eq. 4 assumes the previous range was LOS
+}
+
+TEST(GatingLayer, SvmEvidenceFlagsRangeJump) {
+  GatingLayer g;
+  ASSERT_TRUE(ok(g.configure(make_site(), params_with(GatingPolicy::kSvm))));
+  EXPECT_TRUE(std::isnan(g.assess(ctx_at(0, 0, 20.0F, 0.0F)).p_svm));
+  const GatingDecision d = g.assess(ctx_at(0, 80000, 21.5F, 1.5F));  // v_uk = 18.75 m/s, speed 0
+  EXPECT_GT(d.p_svm, 0.5F);
+  EXPECT_TRUE(d.nlos);
+}
+
+TEST(GatingLayer, DempsterShaferEpochPolicy) {
+  GatingLayer g;
+  ASSERT_TRUE(ok(g.configure(make_site(), params_with(GatingPolicy::kDempsterShafer))));
+  // Epoch 1: all four anchors consistent -> all fused.
+  for (int a = 0; a < 4; ++a) EXPECT_TRUE(g.assess(ctx_at(a, 20000U * static_cast<uint64_t>(a), 20.0F, 0.0F)).use);
+  // Anchor 0 jumps +1.5 m: R = ds(p1 high, 0.9) > 0.8 -> NLOS, dropped.
+  const GatingDecision jump = g.assess(ctx_at(0, 80000, 21.5F, 1.5F));
+  EXPECT_TRUE(jump.nlos);
+  EXPECT_FALSE(jump.use);
+  // One NLOS of four in the epoch (fewer than half): a clearly LOS range is fused.
+  const GatingDecision los = g.assess(ctx_at(1, 100000, 20.0F, 0.0F));
+  EXPECT_FALSE(los.nlos);
+  EXPECT_LT(los.p_fused, 0.7F);
+  EXPECT_TRUE(los.use);
+  // Anchor 2 also jumps: two NLOS of four (not fewer than half) -> the epoch is dropped.
+  EXPECT_FALSE(g.assess(ctx_at(2, 120000, 21.5F, 1.5F)).use);
+  EXPECT_FALSE(g.assess(ctx_at(3, 140000, 20.0F, 0.0F)).use);
+}
+
+TEST(GatingLayer, DefaultHysteresisHoldsAnchorUntilConsecutiveLos) {
+  GatingLayer g;
+  Params p = params_with(GatingPolicy::kDefault);
+  ASSERT_TRUE(ok(p.set(ParamId::kGateHystN, 2.0F)));
+  ASSERT_TRUE(ok(g.configure(make_site(), p)));
+  EXPECT_TRUE(g.assess(ctx_at(0, 0, 20.0F, 0.0F)).use);
+  const GatingDecision bad = g.assess(ctx_at(0, 80000, 21.5F, 1.5F));
+  EXPECT_TRUE(bad.nlos);
+  EXPECT_FALSE(bad.use);
+  EXPECT_TRUE(g.anchor_stats(0).nlos_state);
+  // Back to LOS (innovation 0): the first LOS sample is held, the second re-admits.
+  const GatingDecision held = g.assess(ctx_at(0, 160000, 20.0F, 0.0F));
+  EXPECT_FALSE(held.nlos);
+  EXPECT_FALSE(held.use);
+  const GatingDecision again = g.assess(ctx_at(0, 240000, 20.0F, 0.0F));
+  EXPECT_TRUE(again.use);
+  EXPECT_FALSE(g.anchor_stats(0).nlos_state);
+  const GatingAnchorStats st = g.anchor_stats(0);
+  EXPECT_EQ(st.nlos_count, 1U);
+  EXPECT_EQ(st.los_count, 3U);
+  EXPECT_EQ(st.held_count, 1U);
+}
+
+TEST(GatingLayer, DefaultEscapeReadmitsAfterSustainedRejection) {
+  GatingLayer g;
+  Params p = params_with(GatingPolicy::kDefault);
+  ASSERT_TRUE(ok(p.set(ParamId::kGateEscapeS, 1.0F)));
+  ASSERT_TRUE(ok(g.configure(make_site(), p)));
+  // The filter has drifted 3 m: every innovation is -3 m (20 sigma) although the
+  // ranges themselves are steady (LOS by range rate and consistency).
+  uint64_t t = 0;
+  bool escaped = false;
+  for (int k = 0; k < 100 && !escaped; ++k) {
+    const int a = k % 4;
+    RangeContext c = ctx_at(a, t, 20.0F, -3.0F);
+    const GatingDecision d = g.assess(c);
+    if (d.use) {
+      EXPECT_GT(d.r_scale, 1.0F);  // admitted only with inflated R
+      EXPECT_GE(t, 1000000U);
+      g.on_result(c, d, true);
+      escaped = true;
+    } else {
+      g.on_result(c, d, false);
+    }
+    t += 20000;
+  }
+  EXPECT_TRUE(escaped);
+  EXPECT_TRUE(g.escape_active());
+  EXPECT_EQ(g.escape_entries(), 1U);
+  // The filter recovered: anchor 1 (in NLOS state after the rejections) passes the gate
+  // again; its first LOS range is still held by the hysteresis (admitted by the escape),
+  // the second is fused normally without inflation, which ends the escape.
+  for (int k = 0; k < 2; ++k) {
+    RangeContext c = ctx_at(1, t, 20.0F, 0.01F);
+    const GatingDecision d = g.assess(c);
+    ASSERT_TRUE(d.use);
+    EXPECT_FLOAT_EQ(d.r_scale, k == 0 ? 100.0F : 1.0F);
+    g.on_result(c, d, true);
+    t += 20000;
+  }
+  EXPECT_FALSE(g.escape_active());
+}
+
+TEST(GatingLayer, DefaultRejectsGrossOutlierDespiteLosEvidence) {
+  GatingLayer g;
+  ASSERT_TRUE(ok(g.configure(make_site(), params_with(GatingPolicy::kDefault))));
+  EXPECT_TRUE(g.assess(ctx_at(0, 0, 20.0F, 0.0F)).use);
+  EXPECT_FALSE(g.assess(ctx_at(1, 20000, 20.0F, -20.0F)).use);  // first range of anchor 1: no Δρ
+}
+
+TEST(GatingLayer, UsedCountersFollowOnResult) {
+  GatingLayer g;
+  ASSERT_TRUE(ok(g.configure(make_site(), params_with(GatingPolicy::kNone))));
+  RangeContext c = ctx_at(2, 1000, 20.0F, 0.0F);
+  const GatingDecision d = g.assess(c);
+  g.on_result(c, d, true);
+  EXPECT_EQ(g.anchor_stats(2).used_count, 1U);
+  g.reset();
+  EXPECT_EQ(g.anchor_stats(2).used_count, 0U);
+}
+
+}  // namespace
+}  // namespace uwbnav

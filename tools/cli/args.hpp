@@ -1,0 +1,84 @@
+// Minimal command-line parsing for `uwbnav` subcommands: positionals and
+// --key value / --flag options, with clear one-line errors.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace uwbnav::cli {
+
+class Args {
+ public:
+  // `flags` are options without a value; every other --option takes one value.
+  Args(int argc, char** argv, const std::vector<std::string>& flags) {
+    for (int i = 1; i < argc; ++i) {
+      std::string a = argv[i];
+      if (a.rfind("--", 0) == 0) {
+        const bool is_flag = std::find(flags.begin(), flags.end(), a) != flags.end();
+        if (is_flag) {
+          options_[a].push_back("1");
+        } else if (i + 1 < argc) {
+          options_[a].push_back(argv[++i]);
+        } else {
+          error_ = "option " + a + " needs a value";
+        }
+      } else {
+        positional_.push_back(a);
+      }
+    }
+  }
+  const std::string& error() const { return error_; }
+  const std::vector<std::string>& positional() const { return positional_; }
+  bool has(const std::string& key) const { return options_.count(key) > 0; }
+  std::string get(const std::string& key, const std::string& def = "") const {
+    auto it = options_.find(key);
+    return it == options_.end() ? def : it->second.back();
+  }
+  std::vector<std::string> all(const std::string& key) const {
+    auto it = options_.find(key);
+    return it == options_.end() ? std::vector<std::string>{} : it->second;
+  }
+  // Unknown options (not in `known`): returns the first, or "".
+  std::string unknown(const std::vector<std::string>& known) const {
+    for (const auto& kv : options_) {
+      if (std::find(known.begin(), known.end(), kv.first) == known.end()) return kv.first;
+    }
+    return "";
+  }
+  bool get_u64(const std::string& key, uint64_t def, uint64_t* out) const {
+    if (!has(key)) {
+      *out = def;
+      return true;
+    }
+    const std::string v = get(key);
+    char* end = nullptr;
+    const unsigned long long x = std::strtoull(v.c_str(), &end, 10);
+    if (v.empty() || *end != '\0' || v[0] == '-') return false;
+    *out = x;
+    return true;
+  }
+
+ private:
+  std::vector<std::string> positional_;
+  std::map<std::string, std::vector<std::string>> options_;
+  std::string error_;
+};
+
+// Parses "name=value" parameter overrides (--param). False on malformed input.
+inline bool parse_param_override(const std::string& s, std::pair<std::string, float>* out) {
+  const size_t eq = s.find('=');
+  if (eq == std::string::npos || eq == 0) return false;
+  char* end = nullptr;
+  const std::string v = s.substr(eq + 1);
+  const float x = std::strtof(v.c_str(), &end);
+  if (v.empty() || *end != '\0') return false;
+  *out = {s.substr(0, eq), x};
+  return true;
+}
+
+}  // namespace uwbnav::cli

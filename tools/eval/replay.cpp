@@ -1,0 +1,164 @@
+// Lockstep replay of a recording through the firmware App (see replay.hpp).
+#include "tools/eval/replay.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include "firmware/app.hpp"
+#include "hal/host/candump_log.hpp"
+#include "hal/host/file_param_store.hpp"
+#include "hal/host/lockstep_clock.hpp"
+#include "hal/host/mem_can_bus.hpp"
+#include "hal/host/replay_sources.hpp"
+
+namespace uwbnav::eval {
+namespace {
+
+// Collects what the firmware computed and streams it to the output files.
+class ReplayObserver final : public AppObserver {
+ public:
+  ReplayObserver(ReplayResult& result, bool keep) : result_(result), keep_(keep) {}
+
+  Status open(const std::string& dir) {
+    if (dir.empty()) return Status::kOk;
+    writing_ = true;
+    if (!ok(est_.open(dir + "/estimates.csv"))) return Status::kIoError;
+    if (!ok(rng_.open(dir + "/ranges.csv"))) return Status::kIoError;
+    return Status::kOk;
+  }
+  Status close() {
+    if (!writing_) return Status::kOk;
+    const Status a = est_.close();
+    const Status b = rng_.close();
+    return ok(a) && ok(b) && !write_failed_ ? Status::kOk : Status::kIoError;
+  }
+
+  void on_range(const RangeReport& r) override {
+    if (r.used) {
+      ++result_.ranges_used;
+    } else {
+      ++result_.ranges_rejected;
+    }
+    if (keep_) result_.ranges.push_back(r);
+    if (writing_ && !ok(rng_.write(r))) write_failed_ = true;
+  }
+  void on_output(const NavOutput& o) override {
+    if (keep_) result_.estimates.push_back(to_estimate_row(o));
+    if (writing_ && !ok(est_.write(o))) write_failed_ = true;
+  }
+
+ private:
+  ReplayResult& result_;
+  bool keep_;
+  bool writing_ = false;
+  bool write_failed_ = false;
+  dataset::EstimatesWriter est_;
+  dataset::RangesWriter rng_;
+};
+
+uint64_t first_sensor_time_us(const dataset::Recording& rec) {
+  uint64_t t = UINT64_MAX;
+  if (!rec.imu.empty()) t = rec.imu.front().t_us;
+  if (!rec.uwb.empty() && rec.uwb.front().range.t_us < t) t = rec.uwb.front().range.t_us;
+  return t == UINT64_MAX ? 0 : t;
+}
+
+}  // namespace
+
+dataset::EstimateRow to_estimate_row(const NavOutput& o) {
+  dataset::EstimateRow r;
+  r.t_us = o.t_us;
+  r.pos_nav_m[0] = o.pos_nav_m.x;
+  r.pos_nav_m[1] = o.pos_nav_m.y;
+  r.pos_nav_m[2] = o.pos_nav_m.z;
+  r.vel_nav_mps[0] = o.vel_nav_mps.x;
+  r.vel_nav_mps[1] = o.vel_nav_mps.y;
+  r.vel_nav_mps[2] = o.vel_nav_mps.z;
+  for (int k = 0; k < 4; ++k) r.q_nav_body[k] = o.q_nav_body[k];
+  r.pos_sigma_m[0] = o.pos_sigma_m.x;
+  r.pos_sigma_m[1] = o.pos_sigma_m.y;
+  r.pos_sigma_m[2] = o.pos_sigma_m.z;
+  r.status = static_cast<int>(o.status);
+  return r;
+}
+
+Status run_replay(const dataset::Recording& rec, const ReplayOptions& options, ReplayResult& result,
+                  std::string* error) {
+  result = ReplayResult{};
+  hal::ReplaySources sources(rec);
+  hal::LockstepClock clock;
+  hal::MemCanBus bus;
+  hal::CandumpLogWriter can_log;
+  hal::CanLogTee can(bus, can_log);
+  hal::NullSerialPort serial;
+  hal::EmptyParamStore store;
+  hal::Board board{sources.imu, sources.uwb, can, serial, clock, store, rec.site};
+
+  App app(board);
+  if (!ok(app.init())) {
+    if (error) *error = "estimator rejected the site configuration (anchors/tags)";
+    return Status::kInvalidArgument;
+  }
+  for (const auto& [name, value] : options.params) {
+    const ParamDef* d = Params::find(name.c_str());
+    if (d == nullptr) {
+      if (error) *error = "unknown parameter '" + name + "'";
+      return Status::kNotFound;
+    }
+    if (!ok(app.set_param(d->index, value))) {
+      if (error) *error = "parameter '" + name + "' out of range [" + std::to_string(d->min) + ", " +
+                          std::to_string(d->max) + "]";
+      return Status::kOutOfRange;
+    }
+  }
+
+  ReplayObserver observer(result, options.keep_in_memory);
+  if (!ok(observer.open(options.out_dir)) ||
+      (!options.out_dir.empty() && !ok(can_log.open(options.out_dir + "/can.log", "can0")))) {
+    if (error) *error = "cannot write outputs to " + options.out_dir;
+    return Status::kIoError;
+  }
+  app.set_observer(&observer);
+  if (options.keep_in_memory) {
+    const size_t n = rec.imu.empty() ? rec.uwb.size() : rec.imu.size();
+    result.estimates.reserve(n + 16);
+    result.ranges.reserve(rec.uwb.size());
+  }
+
+  // Loop time on the 10 ms grid, starting at the cycle that holds the first sample.
+  const uint64_t t0 = first_sensor_time_us(rec);
+  uint64_t t = (t0 / kCyclePeriodUs + 1) * kCyclePeriodUs;
+  const auto wall0 = std::chrono::steady_clock::now();
+  uint64_t next_progress = 0;
+  const uint64_t t_end = std::max(rec.imu.empty() ? 0 : rec.imu.back().t_us,
+                                  rec.uwb.empty() ? 0 : rec.uwb.back().range.t_us);
+  for (;;) {
+    clock.sleep_until_us(t);
+    app.tick(t);
+    ++result.cycles;
+    // Drain what the firmware sent so the in-memory bus never fills.
+    hal::CanFrame f;
+    while (ok(bus.receive_sent(f))) ++result.can_frames;
+    if (options.progress && result.cycles >= next_progress) {
+      std::fprintf(stderr, "\rreplay %5.1f %%", t_end > t0 ? 100.0 * static_cast<double>(t - t0) / static_cast<double>(t_end - t0) : 100.0);
+      next_progress = result.cycles + 10000;
+    }
+    if (sources.imu.finished() && sources.uwb.finished()) break;
+    t += kCyclePeriodUs;
+  }
+  const auto wall1 = std::chrono::steady_clock::now();
+  if (options.progress) std::fprintf(stderr, "\rreplay 100.0 %%\n");
+  result.wall_s = std::chrono::duration<double>(wall1 - wall0).count();
+  result.stats = app.stats();
+  result.diag = app.navigator().diagnostics();
+  const Status closed = observer.close();
+  const Status log_closed = options.out_dir.empty() ? Status::kOk : can_log.close();
+  if (!ok(closed) || !ok(log_closed)) {
+    if (error) *error = "writing outputs to " + options.out_dir + " failed";
+    return Status::kIoError;
+  }
+  return Status::kOk;
+}
+
+}  // namespace uwbnav::eval

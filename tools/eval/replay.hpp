@@ -1,0 +1,44 @@
+// Lockstep replay: runs the firmware App over a format v1 recording on the
+// host replay board (clock follows the recording, as fast as the CPU allows,
+// bit-for-bit deterministic), collecting and optionally writing the outputs.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "estimator/navigator.hpp"
+#include "firmware/app_stats.hpp"
+#include "hal/hal.hpp"
+#include "tools/dataset/recording.hpp"
+
+namespace uwbnav::eval {
+
+struct ReplayOptions {
+  std::string out_dir;        // write estimates.csv, ranges.csv, can.log here; empty: nothing written
+  bool keep_in_memory = true; // keep estimates/ranges in ReplayResult
+  std::vector<std::pair<std::string, float>> params;  // overrides by name, applied after defaults
+  bool progress = false;      // progress line on stderr for long runs
+};
+
+struct ReplayResult {
+  uint64_t cycles = 0;
+  double wall_s = 0.0;                        // host wall time of the loop [s]
+  AppStats stats;
+  NavDiagnostics diag;
+  uint64_t ranges_used = 0;
+  uint64_t ranges_rejected = 0;
+  uint64_t can_frames = 0;                    // frames the firmware sent
+  std::vector<dataset::EstimateRow> estimates;
+  std::vector<RangeReport> ranges;
+};
+
+// kOk on success; on failure `error` says why (bad parameter override, output not writable).
+[[nodiscard]] Status run_replay(const dataset::Recording& rec, const ReplayOptions& options, ReplayResult& result,
+                                std::string* error);
+
+// NavOutput -> the row format of estimates.csv (for in-memory evaluation).
+dataset::EstimateRow to_estimate_row(const NavOutput& out);
+
+}  // namespace uwbnav::eval

@@ -1,0 +1,64 @@
+// Result table of a replay (see summary.hpp).
+#include "tools/eval/summary.hpp"
+
+#include "tools/eval/baselines.hpp"
+
+namespace uwbnav::eval {
+
+RunSummary summarise(const dataset::Recording& rec, const ReplayResult& result) {
+  RunSummary s;
+  s.name = rec.name();
+  s.has_truth = !rec.truth.empty();
+  s.ranges_used = result.ranges_used;
+  s.ranges_rejected = result.ranges_rejected;
+  s.imu_rejected = result.stats.imu.rejected_total();
+  s.uwb_rejected = result.stats.uwb.rejected_total();
+  s.cycles = result.cycles;
+  s.wall_s = result.wall_s;
+  s.resets = result.diag.resets;
+  s.reinits = result.diag.reinits;
+  for (const auto& u : rec.uwb) s.ranges_nlos_labelled += u.nlos_label == 1 ? 1 : 0;
+  if (s.has_truth) {
+    size_t total = 0;
+    for (const auto& e : result.estimates) {
+      double p[3];
+      if (truth_at(rec.truth, e.t_us, p)) ++total;
+    }
+    s.filter = accuracy(compare_with_truth(result.estimates, rec.truth), total);
+    const auto ls = ls_baseline(rec, LsMethod::kLinear);
+    s.ls_uwb = accuracy(compare_with_truth(ls, tag_truth(rec)), total);
+  }
+  return s;
+}
+
+void print_summary(std::FILE* f, const RunSummary& s) {
+  std::fprintf(f, "\nuwbnav result: %s\n\n", s.name.c_str());
+  if (s.has_truth) {
+    std::fprintf(f, "| method | epochs | availability | RMSE h [m] | MAX h [m] | STD h [m] | in 2-sigma x/y |\n");
+    std::fprintf(f, "|---|---:|---:|---:|---:|---:|---:|\n");
+    auto row = [&](const char* name, const AccuracyStats& a, bool sigma) {
+      const double avail = a.epochs_total ? 100.0 * static_cast<double>(a.epochs) / static_cast<double>(a.epochs_total) : 0.0;
+      std::fprintf(f, "| %s | %zu | %.1f %% | %.3f | %.3f | %.3f |", name, a.epochs, avail, a.rmse_h_m, a.max_h_m, a.std_h_m);
+      if (sigma) {
+        std::fprintf(f, " %.1f %% / %.1f %% |\n", 100.0 * a.inside_2sigma_x, 100.0 * a.inside_2sigma_y);
+      } else {
+        std::fprintf(f, " - |\n");
+      }
+    };
+    row("uwbnav EKF (default gating)", s.filter, true);
+    row("LS-UWB baseline (tag)", s.ls_uwb, false);
+    std::fprintf(f, "\n");
+  } else {
+    std::fprintf(f, "(no truth in this recording: accuracy not computed)\n\n");
+  }
+  std::fprintf(f, "ranges used %llu, rejected by gating %llu (labelled NLOS in the recording: %llu)\n",
+               static_cast<unsigned long long>(s.ranges_used), static_cast<unsigned long long>(s.ranges_rejected),
+               static_cast<unsigned long long>(s.ranges_nlos_labelled));
+  std::fprintf(f, "input frames rejected by validation: IMU %llu, UWB %llu; filter resets %u, re-inits %u\n",
+               static_cast<unsigned long long>(s.imu_rejected), static_cast<unsigned long long>(s.uwb_rejected),
+               s.resets, s.reinits);
+  std::fprintf(f, "firmware cycles %llu in %.3f s wall (%.0f cycles/s)\n", static_cast<unsigned long long>(s.cycles),
+               s.wall_s, s.wall_s > 0 ? static_cast<double>(s.cycles) / s.wall_s : 0.0);
+}
+
+}  // namespace uwbnav::eval

@@ -1,0 +1,529 @@
+// Offline SVM training with libsvm and export of the embedded models (`uwbnav train-svm`).
+#include "tools/eval/svm_train.hpp"
+
+#include <svm.h>
+
+#include <algorithm>
+#include <cinttypes>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <random>
+#include <set>
+#include <sstream>
+
+#include "tools/sim/simulator.hpp"
+
+namespace uwbnav::eval {
+
+namespace {
+
+void quiet_print(const char*) {}
+
+// A libsvm problem owning its nodes.
+struct Problem {
+  std::vector<svm_node> nodes;
+  std::vector<svm_node*> rows;
+  std::vector<double> labels;
+  svm_problem prob{};
+};
+
+void scale_sample(const SvmModel& scaling, const SvmSample& s, double* out) { svm_scale(scaling, s.features, out); }
+
+std::unique_ptr<Problem> make_problem(const std::vector<SvmSample>& samples, const SvmModel& scaling) {
+  auto p = std::make_unique<Problem>();
+  const size_t nf = scaling.num_features;
+  p->nodes.resize(samples.size() * (nf + 1));
+  p->rows.resize(samples.size());
+  p->labels.resize(samples.size());
+  for (size_t i = 0; i < samples.size(); ++i) {
+    double x[kSvmMaxFeatures] = {};
+    scale_sample(scaling, samples[i], x);
+    svm_node* row = &p->nodes[i * (nf + 1)];
+    for (size_t f = 0; f < nf; ++f) {
+      row[f].index = static_cast<int>(f + 1);
+      row[f].value = x[f];
+    }
+    row[nf].index = -1;
+    row[nf].value = 0.0;
+    p->rows[i] = row;
+    p->labels[i] = samples[i].label;
+  }
+  p->prob.l = static_cast<int>(samples.size());
+  p->prob.y = p->labels.data();
+  p->prob.x = p->rows.data();
+  return p;
+}
+
+svm_parameter make_param(double c, double gamma, bool probability) {
+  svm_parameter param{};
+  param.svm_type = C_SVC;
+  param.kernel_type = RBF;
+  param.gamma = gamma;
+  param.C = c;
+  param.cache_size = 200;
+  param.eps = 1e-3;
+  param.shrinking = 1;
+  param.probability = probability ? 1 : 0;
+  param.nr_weight = 0;
+  return param;
+}
+
+// libsvm model -> embedded model (scaling copied from `scaling`).
+bool to_embedded(const svm_model* lm, const SvmModel& scaling, size_t capacity, SvmModel& out) {
+  if (svm_get_nr_class(lm) != 2 || svm_check_probability_model(lm) == 0) return false;
+  const int nsv = svm_get_nr_sv(lm);
+  if (nsv <= 0 || static_cast<size_t>(nsv) > capacity || static_cast<size_t>(nsv) > kSvmMaxSupportVectors) {
+    return false;
+  }
+  out = SvmModel{};
+  out.version = kSvmModelVersion;
+  out.feature_set = scaling.feature_set;
+  out.num_features = scaling.num_features;
+  out.num_sv = static_cast<uint16_t>(nsv);
+  int labels[2] = {0, 0};
+  svm_get_labels(lm, labels);
+  out.first_label_nlos = labels[0] == 1 ? 1 : 0;
+  out.gamma = lm->param.gamma;
+  out.rho = lm->rho[0];
+  out.prob_a = lm->probA[0];
+  out.prob_b = lm->probB[0];
+  for (size_t f = 0; f < kSvmMaxFeatures; ++f) {
+    out.scale_min[f] = scaling.scale_min[f];
+    out.scale_max[f] = scaling.scale_max[f];
+  }
+  for (int i = 0; i < nsv; ++i) {
+    for (const svm_node* n = lm->SV[i]; n->index != -1; ++n) {
+      if (n->index >= 1 && static_cast<size_t>(n->index) <= out.num_features) out.sv[i][n->index - 1] = n->value;
+    }
+    out.coef[i] = lm->sv_coef[0][i];
+  }
+  out.crc32 = svm_model_crc32(out);
+  return true;
+}
+
+std::vector<double> default_grid(int lo_exp, int hi_exp, int step) {
+  std::vector<double> g;
+  for (int e = lo_exp; e <= hi_exp; e += step) g.push_back(std::ldexp(1.0, e));
+  return g;
+}
+
+// Fold of each sample: stratified random folds, or whole groups per fold.
+std::vector<int> assign_folds(const std::vector<SvmSample>& samples, int folds, bool grouped, uint64_t seed) {
+  std::vector<int> fold(samples.size(), 0);
+  std::mt19937_64 rng(seed);
+  if (grouped) {
+    std::vector<int> groups;
+    for (const auto& s : samples) groups.push_back(s.group);
+    std::sort(groups.begin(), groups.end());
+    groups.erase(std::unique(groups.begin(), groups.end()), groups.end());
+    std::shuffle(groups.begin(), groups.end(), rng);
+    std::map<int, int> group_fold;
+    for (size_t i = 0; i < groups.size(); ++i) group_fold[groups[i]] = static_cast<int>(i % static_cast<size_t>(folds));
+    for (size_t i = 0; i < samples.size(); ++i) fold[i] = group_fold[samples[i].group];
+    return fold;
+  }
+  for (int label = 0; label <= 1; ++label) {
+    std::vector<size_t> idx;
+    for (size_t i = 0; i < samples.size(); ++i) {
+      if (samples[i].label == label) idx.push_back(i);
+    }
+    std::shuffle(idx.begin(), idx.end(), rng);
+    for (size_t k = 0; k < idx.size(); ++k) fold[idx[k]] = static_cast<int>(k % static_cast<size_t>(folds));
+  }
+  return fold;
+}
+
+std::string format_double(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.17g", v);
+  std::string s = buf;
+  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
+  return s;
+}
+
+std::string format_float(float v) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.9g", static_cast<double>(v));
+  std::string s = buf;
+  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
+  return s + "F";
+}
+
+}  // namespace
+
+std::vector<SvmSample> stratified_subsample(const std::vector<SvmSample>& samples, size_t n, uint64_t seed) {
+  if (samples.size() <= n) return samples;
+  std::mt19937_64 rng(seed);
+  std::vector<size_t> by_label[2];
+  for (size_t i = 0; i < samples.size(); ++i) by_label[samples[i].label != 0 ? 1 : 0].push_back(i);
+  std::vector<size_t> keep;
+  for (auto& idx : by_label) {
+    std::shuffle(idx.begin(), idx.end(), rng);
+    const size_t k = static_cast<size_t>(std::llround(static_cast<double>(n) * static_cast<double>(idx.size()) /
+                                                      static_cast<double>(samples.size())));
+    keep.insert(keep.end(), idx.begin(), idx.begin() + static_cast<std::ptrdiff_t>(std::min(k, idx.size())));
+  }
+  std::sort(keep.begin(), keep.end());
+  std::vector<SvmSample> out;
+  out.reserve(keep.size());
+  for (size_t i : keep) out.push_back(samples[i]);
+  return out;
+}
+
+void fit_scaling(const std::vector<SvmSample>& train, SvmFeatureSet set, SvmModel& scaling) {
+  scaling = SvmModel{};
+  scaling.feature_set = static_cast<uint8_t>(set);
+  scaling.num_features = static_cast<uint8_t>(svm_feature_count(set));
+  for (size_t f = 0; f < scaling.num_features; ++f) {
+    float lo = 0.0F;
+    float hi = 0.0F;
+    bool first = true;
+    for (const auto& s : train) {
+      if (first || s.features[f] < lo) lo = s.features[f];
+      if (first || s.features[f] > hi) hi = s.features[f];
+      first = false;
+    }
+    scaling.scale_min[f] = lo;
+    scaling.scale_max[f] = hi;
+  }
+}
+
+void cross_validate(const std::vector<SvmSample>& samples, SvmFeatureSet set, double c, double gamma, int folds,
+                    bool grouped, bool probability, uint64_t seed, std::vector<int>* predicted,
+                    std::vector<double>* p_nlos) {
+  svm_set_print_string_function(quiet_print);
+  const std::vector<int> fold = assign_folds(samples, folds, grouped, seed);
+  if (predicted != nullptr) predicted->assign(samples.size(), 0);
+  if (p_nlos != nullptr) p_nlos->assign(samples.size(), std::nan(""));
+  for (int k = 0; k < folds; ++k) {
+    std::vector<SvmSample> train;
+    std::vector<size_t> test;
+    for (size_t i = 0; i < samples.size(); ++i) {
+      if (fold[i] == k) {
+        test.push_back(i);
+      } else {
+        train.push_back(samples[i]);
+      }
+    }
+    if (train.empty() || test.empty()) continue;
+    SvmModel scaling;
+    fit_scaling(train, set, scaling);
+    auto prob = make_problem(train, scaling);
+    const svm_parameter param = make_param(c, gamma, probability);
+    std::srand(static_cast<unsigned>(seed + static_cast<uint64_t>(k)));
+    svm_model* lm = svm_train(&prob->prob, &param);
+    int labels[2] = {0, 0};
+    svm_get_labels(lm, labels);
+    for (size_t i : test) {
+      double x[kSvmMaxFeatures] = {};
+      scale_sample(scaling, samples[i], x);
+      svm_node nodes[kSvmMaxFeatures + 1];
+      for (size_t f = 0; f < scaling.num_features; ++f) {
+        nodes[f].index = static_cast<int>(f + 1);
+        nodes[f].value = x[f];
+      }
+      nodes[scaling.num_features].index = -1;
+      double label = 0.0;
+      if (probability && svm_check_probability_model(lm) != 0) {
+        double pe[2] = {0.0, 0.0};
+        label = svm_predict_probability(lm, nodes, pe);
+        if (p_nlos != nullptr) (*p_nlos)[i] = labels[0] == 1 ? pe[0] : pe[1];
+      } else {
+        label = svm_predict(lm, nodes);
+      }
+      if (predicted != nullptr) (*predicted)[i] = label > 0.5 ? 1 : 0;
+    }
+    svm_free_and_destroy_model(&lm);
+  }
+}
+
+Status train_svm_model(const std::vector<SvmSample>& samples, const SvmTrainOptions& options, SvmModel& model,
+                       SvmTrainReport& report, std::string* error) {
+  svm_set_print_string_function(quiet_print);
+  report = SvmTrainReport{};
+  report.samples_available = samples.size();
+  size_t n_pos = 0;
+  for (const auto& s : samples) n_pos += s.label != 0 ? 1U : 0U;
+  if (samples.size() < 20 || n_pos < 5 || samples.size() - n_pos < 5) {
+    if (error != nullptr) *error = "too few labelled samples of both classes";
+    return Status::kInvalidArgument;
+  }
+  const std::vector<double> c_grid = options.c_grid.empty() ? default_grid(-1, 9, 2) : options.c_grid;
+  const std::vector<double> g_grid = options.gamma_grid.empty() ? default_grid(-3, 5, 2) : options.gamma_grid;
+
+  // Grid search (seed 000: parameters by cross-validation).
+  const std::vector<SvmSample> grid_set = stratified_subsample(samples, options.grid_samples, options.seed);
+  SvmModel grid_scaling;
+  fit_scaling(grid_set, options.set, grid_scaling);
+  auto grid_prob = make_problem(grid_set, grid_scaling);
+  for (double c : c_grid) {
+    for (double g : g_grid) {
+      size_t correct = 0;
+      if (options.grouped_cv) {
+        std::vector<int> pred;
+        cross_validate(grid_set, options.set, c, g, options.folds, true, false, options.seed, &pred, nullptr);
+        for (size_t i = 0; i < grid_set.size(); ++i) correct += pred[i] == grid_set[i].label ? 1U : 0U;
+      } else {
+        const svm_parameter param = make_param(c, g, false);
+        std::vector<double> target(grid_set.size(), 0.0);
+        std::srand(static_cast<unsigned>(options.seed));
+        svm_cross_validation(&grid_prob->prob, &param, options.folds, target.data());
+        for (size_t i = 0; i < grid_set.size(); ++i) correct += (target[i] > 0.5 ? 1 : 0) == grid_set[i].label ? 1U : 0U;
+      }
+      SvmGridPoint gp{c, g, static_cast<double>(correct) / static_cast<double>(grid_set.size())};
+      report.grid.push_back(gp);
+      if (options.verbose) std::fprintf(stderr, "  C=%-8g gamma=%-8g cv=%.4f\n", c, g, gp.cv_accuracy);
+      if (gp.cv_accuracy > report.best_cv_accuracy + 1e-12) {
+        report.best_cv_accuracy = gp.cv_accuracy;
+        report.best_c = c;
+        report.best_gamma = g;
+      }
+    }
+  }
+
+  // Final model under the support-vector capacity: shrink the training set until nSV fits.
+  size_t n_train = std::min(samples.size(), options.max_train_samples);
+  for (int attempt = 0; attempt < 12; ++attempt) {
+    const std::vector<SvmSample> train = stratified_subsample(samples, n_train, options.seed + 17U);
+    SvmModel scaling;
+    fit_scaling(train, options.set, scaling);
+    auto prob = make_problem(train, scaling);
+    const svm_parameter param = make_param(report.best_c, report.best_gamma, true);
+    std::srand(static_cast<unsigned>(options.seed));
+    svm_model* lm = svm_train(&prob->prob, &param);
+    const size_t nsv = static_cast<size_t>(svm_get_nr_sv(lm));
+    const bool fits = to_embedded(lm, scaling, options.capacity, model);
+    svm_free_and_destroy_model(&lm);
+    report.num_sv = nsv;
+    report.samples_trained = train.size();
+    if (fits) return Status::kOk;
+    ++report.capacity_retries;
+    n_train = static_cast<size_t>(0.9 * static_cast<double>(train.size()) * static_cast<double>(options.capacity) /
+                                  static_cast<double>(nsv));
+    if (n_train < 20) break;
+  }
+  if (error != nullptr) *error = "cannot meet the support-vector capacity";
+  return Status::kFull;
+}
+
+std::string export_models_cpp(const std::vector<SvmModel>& models, const std::vector<std::string>& names,
+                              const std::vector<SvmTrainReport>& reports, const std::string& command_line) {
+  std::ostringstream o;
+  o << "// GENERATED by `uwbnav train-svm` (tools/eval/svm_train.cpp) — do not edit.\n";
+  o << "// Committed default NLOS SVM models of the embedded evaluator (estimator/nlos/svm_model.hpp).\n";
+  o << "// Command: " << command_line << "\n";
+  for (size_t m = 0; m < models.size(); ++m) {
+    const SvmTrainReport& r = reports[m];
+    char line[256];
+    std::snprintf(line, sizeof(line),
+                  "// %s: %s, C=%g gamma=%g, grid CV accuracy %.4f, %zu of %zu samples trained, %zu SVs\n",
+                  names[m].c_str(), feature_set_name(static_cast<SvmFeatureSet>(models[m].feature_set)), r.best_c,
+                  r.best_gamma, r.best_cv_accuracy, r.samples_trained, r.samples_available, r.num_sv);
+    o << line;
+  }
+  o << "#include \"estimator/nlos/svm_model.hpp\"\n\nnamespace uwbnav {\n";
+  for (size_t m = 0; m < models.size(); ++m) {
+    const SvmModel& s = models[m];
+    o << "\nconst SvmModel " << names[m] << " = {\n";
+    o << "    " << s.version << "U,  // version\n";
+    o << "    " << static_cast<int>(s.feature_set) << ",  // feature_set\n";
+    o << "    " << static_cast<int>(s.num_features) << ",  // num_features\n";
+    o << "    " << s.num_sv << ",  // num_sv\n";
+    o << "    " << static_cast<int>(s.first_label_nlos) << ",  // first_label_nlos\n";
+    o << "    " << format_double(s.gamma) << ",  // gamma\n";
+    o << "    " << format_double(s.rho) << ",  // rho\n";
+    o << "    " << format_double(s.prob_a) << ",  // prob_a\n";
+    o << "    " << format_double(s.prob_b) << ",  // prob_b\n";
+    o << "    {";
+    for (size_t f = 0; f < s.num_features; ++f) o << (f ? ", " : "") << format_float(s.scale_min[f]);
+    o << "},  // scale_min\n    {";
+    for (size_t f = 0; f < s.num_features; ++f) o << (f ? ", " : "") << format_float(s.scale_max[f]);
+    o << "},  // scale_max\n    {\n";
+    for (size_t i = 0; i < s.num_sv; ++i) {
+      o << "        {";
+      for (size_t f = 0; f < s.num_features; ++f) o << (f ? ", " : "") << format_double(s.sv[i][f]);
+      o << "},\n";
+    }
+    o << "    },\n    {\n";
+    for (size_t i = 0; i < s.num_sv; ++i) o << "        " << format_double(s.coef[i]) << ",\n";
+    char crc[32];
+    std::snprintf(crc, sizeof(crc), "0x%08" PRIX32 "U", s.crc32);
+    o << "    },\n    " << crc << ",  // crc32\n};\n";
+  }
+  o << "\n}  // namespace uwbnav\n";
+  return o.str();
+}
+
+namespace {
+
+const char* model_name(SvmFeatureSet set) {
+  switch (set) {
+    case SvmFeatureSet::kRangeRate: return "kSvmModelRangeRate";
+    case SvmFeatureSet::kRangeRateSpeed: return "kSvmModelRangeRateSpeed";
+    case SvmFeatureSet::kChannel: return "kSvmModelChannel";
+  }
+  return "kSvmModel";
+}
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::string cur;
+  std::istringstream ss(s);
+  while (std::getline(ss, cur, sep)) {
+    if (!cur.empty()) out.push_back(cur);
+  }
+  return out;
+}
+
+int usage() {
+  std::fprintf(stderr,
+               "usage: uwbnav train-svm --features rr,rrs,channel\n"
+               "         (--sim PRESET --seeds N[,N...] | --recording DIR | --table FILE.csv)...\n"
+               "         [--out FILE.cpp] [--folds K] [--grouped] [--seed N] [--grid-samples N]\n"
+               "         [--max-train N] [--capacity N] [--max-dt-us N] [--verbose]\n"
+               "  rr: range rate (seed 000 SVM1); rrs: range rate + speed (SVM2); channel: rx-fp gap, fp power\n");
+  return 2;
+}
+
+}  // namespace
+
+int run_train_svm(int argc, char** argv) {
+  std::vector<std::string> feature_names;
+  std::vector<std::string> sims;
+  std::vector<uint64_t> seeds;
+  std::vector<std::string> recordings;
+  std::vector<std::string> tables;
+  std::string out_path;
+  SvmTrainOptions base;
+  uint64_t max_dt_us = 500000;
+  std::string command_line = "uwbnav train-svm";
+  for (int i = 1; i < argc; ++i) command_line += std::string(" ") + argv[i];
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&](std::string* v) {
+      if (i + 1 >= argc) return false;
+      *v = argv[++i];
+      return true;
+    };
+    std::string v;
+    if (a == "--grouped") {
+      base.grouped_cv = true;
+    } else if (a == "--verbose") {
+      base.verbose = true;
+    } else if (!value(&v)) {
+      return usage();
+    } else if (a == "--features") {
+      feature_names = split(v, ',');
+    } else if (a == "--sim") {
+      sims.push_back(v);
+    } else if (a == "--seeds") {
+      for (const auto& s : split(v, ',')) seeds.push_back(std::strtoull(s.c_str(), nullptr, 10));
+    } else if (a == "--recording") {
+      recordings.push_back(v);
+    } else if (a == "--table") {
+      tables.push_back(v);
+    } else if (a == "--out") {
+      out_path = v;
+    } else if (a == "--folds") {
+      base.folds = std::max(2, std::atoi(v.c_str()));
+    } else if (a == "--seed") {
+      base.seed = std::strtoull(v.c_str(), nullptr, 10);
+    } else if (a == "--grid-samples") {
+      base.grid_samples = std::strtoull(v.c_str(), nullptr, 10);
+    } else if (a == "--max-train") {
+      base.max_train_samples = std::strtoull(v.c_str(), nullptr, 10);
+    } else if (a == "--capacity") {
+      base.capacity = std::min<size_t>(kSvmMaxSupportVectors, std::strtoull(v.c_str(), nullptr, 10));
+    } else if (a == "--max-dt-us") {
+      max_dt_us = std::strtoull(v.c_str(), nullptr, 10);
+    } else {
+      std::fprintf(stderr, "uwbnav train-svm: unknown option %s\n", a.c_str());
+      return usage();
+    }
+  }
+  if (feature_names.empty() || (sims.empty() && recordings.empty() && tables.empty()) ||
+      (!sims.empty() && seeds.empty())) {
+    return usage();
+  }
+  // Load the data once.
+  std::vector<dataset::Recording> recs;
+  for (const auto& preset : sims) {
+    for (uint64_t seed : seeds) {
+      dataset::Recording rec;
+      std::string err;
+      if (!ok(sim::simulate(preset, seed, rec, &err))) {
+        std::fprintf(stderr, "uwbnav train-svm: %s\n", err.c_str());
+        return 1;
+      }
+      recs.push_back(std::move(rec));
+    }
+  }
+  for (const auto& dir : recordings) {
+    dataset::Recording rec;
+    dataset::ReadReport rr;
+    if (!ok(dataset::read_recording(dir, rec, rr))) {
+      std::fprintf(stderr, "uwbnav train-svm: %s\n", rr.error.c_str());
+      return 1;
+    }
+    recs.push_back(std::move(rec));
+  }
+  std::vector<SvmModel> models;
+  std::vector<std::string> names;
+  std::vector<SvmTrainReport> reports;
+  for (const auto& fname : feature_names) {
+    SvmFeatureSet set;
+    if (!parse_feature_set(fname, &set)) {
+      std::fprintf(stderr, "uwbnav train-svm: unknown feature set %s\n", fname.c_str());
+      return usage();
+    }
+    std::vector<SvmSample> samples;
+    std::string err;
+    for (const auto& rec : recs) {
+      if (set == SvmFeatureSet::kChannel && !tables.empty()) break;
+      if (!ok(samples_from_recording(rec, set, max_dt_us, samples, &err))) {
+        std::fprintf(stderr, "uwbnav train-svm: %s\n", err.c_str());
+        return 1;
+      }
+    }
+    if (set == SvmFeatureSet::kChannel) {
+      for (const auto& t : tables) {
+        if (!ok(samples_from_table(t, set, samples, &err))) {
+          std::fprintf(stderr, "uwbnav train-svm: %s\n", err.c_str());
+          return 1;
+        }
+      }
+    }
+    SvmTrainOptions opt = base;
+    opt.set = set;
+    SvmModel model;
+    SvmTrainReport report;
+    std::fprintf(stderr, "train-svm: %s on %zu samples\n", feature_set_name(set), samples.size());
+    if (!ok(train_svm_model(samples, opt, model, report, &err))) {
+      std::fprintf(stderr, "uwbnav train-svm: %s: %s\n", feature_set_name(set), err.c_str());
+      return 1;
+    }
+    std::printf("%-17s C=%-6g gamma=%-6g cv_accuracy=%.2f%%  trained %zu/%zu samples  nSV=%zu (capacity %zu, %d retrains)  crc32=%08" PRIX32 "\n",
+                feature_set_name(set), report.best_c, report.best_gamma, 100.0 * report.best_cv_accuracy,
+                report.samples_trained, report.samples_available, report.num_sv, opt.capacity,
+                report.capacity_retries, model.crc32);
+    models.push_back(model);
+    names.emplace_back(model_name(set));
+    reports.push_back(report);
+  }
+  if (!out_path.empty()) {
+    std::ofstream o(out_path, std::ios::binary);
+    o << export_models_cpp(models, names, reports, command_line);
+    if (!o) {
+      std::fprintf(stderr, "uwbnav train-svm: cannot write %s\n", out_path.c_str());
+      return 1;
+    }
+    std::printf("wrote %s\n", out_path.c_str());
+  }
+  return 0;
+}
+
+}  // namespace uwbnav::eval

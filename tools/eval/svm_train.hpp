@@ -1,0 +1,72 @@
+// Offline SVM training for NLOS identification (seed 000 §1.2(1)): svm-scale
+// scaling, C/gamma grid search by k-fold cross-validation, libsvm C-SVC with
+// RBF kernel and Platt probabilities, support-vector capacity of the embedded
+// evaluator, export as generated C++ source (`uwbnav train-svm`).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "estimator/nlos/svm_model.hpp"
+#include "estimator/status.hpp"
+#include "tools/eval/svm_features.hpp"
+
+namespace uwbnav::eval {
+
+struct SvmTrainOptions {
+  SvmFeatureSet set = SvmFeatureSet::kRangeRateSpeed;
+  int folds = 5;                   // k of the cross-validation
+  bool grouped_cv = false;         // folds hold out whole groups (SvmSample::group)
+  std::vector<double> c_grid;      // empty: 2^-1, 2^1, ..., 2^9
+  std::vector<double> gamma_grid;  // empty: 2^-3, 2^-1, ..., 2^5
+  size_t grid_samples = 2000;      // stratified subsample used by the grid search
+  size_t max_train_samples = 4000; // largest final training set tried
+  size_t capacity = kSvmMaxSupportVectors;  // nSV limit of the embedded evaluator
+  uint64_t seed = 1;               // subsampling and libsvm's rand() (Platt CV, folds)
+  bool verbose = false;            // grid progress on stderr
+};
+
+struct SvmGridPoint {
+  double c = 0.0;
+  double gamma = 0.0;
+  double cv_accuracy = 0.0;  // [0,1]
+};
+
+struct SvmTrainReport {
+  std::vector<SvmGridPoint> grid;
+  double best_c = 0.0;
+  double best_gamma = 0.0;
+  double best_cv_accuracy = 0.0;  // of the grid search [0,1]
+  size_t samples_available = 0;
+  size_t samples_trained = 0;     // final training set size (after the capacity rule)
+  size_t num_sv = 0;
+  int capacity_retries = 0;       // retrains with a smaller training set
+};
+
+// Scaling (min/max of `train` -> [-1, 1]) into a model (only scale_min/max/num_features/feature_set set).
+void fit_scaling(const std::vector<SvmSample>& train, SvmFeatureSet set, SvmModel& scaling);
+
+// k-fold cross-validated predictions (label per sample, probability of NLOS when
+// `probability`) for fixed C, gamma; scaling fitted on each training fold.
+void cross_validate(const std::vector<SvmSample>& samples, SvmFeatureSet set, double c, double gamma, int folds,
+                    bool grouped, bool probability, uint64_t seed, std::vector<int>* predicted,
+                    std::vector<double>* p_nlos);
+
+// Trains one model (grid search, then the capacity rule: the final training set is
+// a stratified subsample of at most max_train_samples; while nSV > capacity the
+// set shrinks to 0.9 * n * capacity / nSV and the model is retrained).
+[[nodiscard]] Status train_svm_model(const std::vector<SvmSample>& samples, const SvmTrainOptions& options,
+                                     SvmModel& model, SvmTrainReport& report, std::string* error);
+
+// Generated C++ source defining `const SvmModel <names[i]>` for each model.
+std::string export_models_cpp(const std::vector<SvmModel>& models, const std::vector<std::string>& names,
+                              const std::vector<SvmTrainReport>& reports, const std::string& command_line);
+
+// Stratified subsample of at most n samples (all when fewer), deterministic in seed.
+std::vector<SvmSample> stratified_subsample(const std::vector<SvmSample>& samples, size_t n, uint64_t seed);
+
+// `uwbnav train-svm ...` (argv[0] is the command name). Exit code 0 on success.
+int run_train_svm(int argc, char** argv);
+
+}  // namespace uwbnav::eval

@@ -1,0 +1,453 @@
+// Scenario text parser, loader and validation (format in docs/simulator.md).
+#include "tools/sim/scenario.hpp"
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <set>
+#include <sstream>
+#include <utility>
+
+#include "estimator/types.hpp"
+
+namespace uwbnav::sim {
+namespace {
+
+std::string trim(const std::string& s) {
+  size_t b = 0;
+  size_t e = s.size();
+  while (b < e && (s[b] == ' ' || s[b] == '\t' || s[b] == '\r')) ++b;
+  while (e > b && (s[e - 1] == ' ' || s[e - 1] == '\t' || s[e - 1] == '\r')) --e;
+  return s.substr(b, e - b);
+}
+
+std::vector<std::string> split_ws(const std::string& s) {
+  std::vector<std::string> out;
+  std::istringstream is(s);
+  std::string w;
+  while (is >> w) out.push_back(w);
+  return out;
+}
+
+bool parse_double(const std::string& s, double& out) {
+  if (s.empty()) return false;
+  char* end = nullptr;
+  const double v = std::strtod(s.c_str(), &end);
+  if (end == s.c_str() || *end != '\0' || !std::isfinite(v)) return false;
+  out = v;
+  return true;
+}
+
+// Parses exactly n numbers separated by white space.
+bool parse_numbers(const std::string& value, size_t n, double* out, std::string* why) {
+  const std::vector<std::string> words = split_ws(value);
+  if (words.size() != n) {
+    *why = "expected " + std::to_string(n) + " numbers, got " + std::to_string(words.size());
+    return false;
+  }
+  for (size_t i = 0; i < n; ++i) {
+    if (!parse_double(words[i], out[i])) {
+      *why = "not a finite number: '" + words[i] + "'";
+      return false;
+    }
+  }
+  return true;
+}
+
+using Setter = std::function<bool(Scenario&, const std::string&, std::string*)>;
+
+// Scalar setter for a double field with an inclusive range.
+template <typename Get>
+Setter real(Get get, double lo, double hi) {
+  return [get, lo, hi](Scenario& s, const std::string& v, std::string* why) {
+    double x = 0.0;
+    if (!parse_numbers(v, 1, &x, why)) return false;
+    if (x < lo || x > hi) {
+      std::ostringstream os;
+      os << "value " << x << " outside [" << lo << ", " << hi << "]";
+      *why = os.str();
+      return false;
+    }
+    get(s) = x;
+    return true;
+  };
+}
+
+template <typename Get>
+Setter flag(Get get) {
+  return [get](Scenario& s, const std::string& v, std::string* why) {
+    if (v == "1" || v == "true" || v == "yes") {
+      get(s) = true;
+      return true;
+    }
+    if (v == "0" || v == "false" || v == "no") {
+      get(s) = false;
+      return true;
+    }
+    *why = "expected 0 or 1, got '" + v + "'";
+    return false;
+  };
+}
+
+bool parse_id(const std::string& w, unsigned long max, unsigned long& out, std::string* why) {
+  double x = 0.0;
+  if (!parse_double(w, x) || x < 0.0 || x > static_cast<double>(max) || std::floor(x) != x) {
+    *why = "id must be an integer in [0, " + std::to_string(max) + "], got '" + w + "'";
+    return false;
+  }
+  out = static_cast<unsigned long>(x);
+  return true;
+}
+
+const std::map<std::string, Setter>& setters() {
+  static const std::map<std::string, Setter> table = [] {
+    std::map<std::string, Setter> m;
+    constexpr double kBig = 1e9;
+    // [scenario]
+    m["scenario.name"] = [](Scenario& s, const std::string& v, std::string* why) {
+      if (v.empty()) {
+        *why = "empty name";
+        return false;
+      }
+      s.name = v;
+      return true;
+    };
+    m["scenario.description"] = [](Scenario& s, const std::string& v, std::string*) {
+      s.description = v;
+      return true;
+    };
+    m["scenario.duration_s"] = real([](Scenario& s) -> double& { return s.duration_s; }, 0.01, 24.0 * 3600.0);
+    m["scenario.platform"] = [](Scenario& s, const std::string& v, std::string* why) {
+      if (v != "ground" && v != "air") {
+        *why = "platform must be ground or air, got '" + v + "'";
+        return false;
+      }
+      s.platform = v;
+      return true;
+    };
+    m["scenario.gravity_mps2"] = real([](Scenario& s) -> double& { return s.gravity_mps2; }, 9.7, 9.9);
+    // [site]
+    m["site.anchor"] = [](Scenario& s, const std::string& v, std::string* why) {
+      const std::vector<std::string> w = split_ws(v);
+      if (w.size() != 4) {
+        *why = "anchor needs 'ID X Y Z'";
+        return false;
+      }
+      AnchorDef a;
+      unsigned long id = 0;
+      if (!parse_id(w[0], 65535, id, why)) return false;
+      a.id = static_cast<uint16_t>(id);
+      for (int i = 0; i < 3; ++i) {
+        if (!parse_double(w[static_cast<size_t>(i) + 1], a.pos_nav_m[i])) {
+          *why = "anchor coordinate not a finite number";
+          return false;
+        }
+      }
+      s.anchors.push_back(a);
+      return true;
+    };
+    m["site.tag"] = [](Scenario& s, const std::string& v, std::string* why) {
+      const std::vector<std::string> w = split_ws(v);
+      if (w.size() != 4) {
+        *why = "tag needs 'ID X Y Z' (lever arm, body frame FLU)";
+        return false;
+      }
+      TagDef t;
+      unsigned long id = 0;
+      if (!parse_id(w[0], 255, id, why)) return false;
+      t.id = static_cast<uint8_t>(id);
+      for (int i = 0; i < 3; ++i) {
+        if (!parse_double(w[static_cast<size_t>(i) + 1], t.lever_body_m[i])) {
+          *why = "tag lever arm not a finite number";
+          return false;
+        }
+      }
+      s.tags.push_back(t);
+      return true;
+    };
+    // [imu]
+    m["imu.enabled"] = flag([](Scenario& s) -> bool& { return s.imu.enabled; });
+    m["imu.rate_hz"] = real([](Scenario& s) -> double& { return s.imu.rate_hz; }, 1.0, 10000.0);
+    m["imu.gyro_bias_sigma_dps"] = real([](Scenario& s) -> double& { return s.imu.gyro_bias_sigma_dps; }, 0, 100);
+    m["imu.gyro_arw_dps_per_sqrt_h"] =
+        real([](Scenario& s) -> double& { return s.imu.gyro_arw_dps_per_sqrt_h; }, 0, 100);
+    m["imu.gyro_bias_rw_dps_per_sqrt_s"] =
+        real([](Scenario& s) -> double& { return s.imu.gyro_bias_rw_dps_per_sqrt_s; }, 0, 10);
+    m["imu.accel_bias_sigma_mg"] = real([](Scenario& s) -> double& { return s.imu.accel_bias_sigma_mg; }, 0, 1000);
+    m["imu.accel_noise_ug_per_sqrt_hz"] =
+        real([](Scenario& s) -> double& { return s.imu.accel_noise_ug_per_sqrt_hz; }, 0, 1e5);
+    m["imu.accel_bias_rw_mps2_per_sqrt_s"] =
+        real([](Scenario& s) -> double& { return s.imu.accel_bias_rw_mps2_per_sqrt_s; }, 0, 10);
+    m["imu.gyro_range_dps"] = real([](Scenario& s) -> double& { return s.imu.gyro_range_dps; }, 1, 1e4);
+    m["imu.accel_range_g"] = real([](Scenario& s) -> double& { return s.imu.accel_range_g; }, 1, 1000);
+    m["imu.gyro_lsb_dps"] = real([](Scenario& s) -> double& { return s.imu.gyro_lsb_dps; }, 0, 10);
+    m["imu.accel_lsb_mg"] = real([](Scenario& s) -> double& { return s.imu.accel_lsb_mg; }, 0, 100);
+    // [uwb]
+    m["uwb.rate_hz"] = real([](Scenario& s) -> double& { return s.uwb.rate_hz; }, 0.1, 1000.0);
+    m["uwb.offset_ms"] = real([](Scenario& s) -> double& { return s.uwb.offset_ms; }, 0, 1000.0);
+    m["uwb.sigma_m"] = real([](Scenario& s) -> double& { return s.uwb.sigma_m; }, 0, 10);
+    m["uwb.packet_loss"] = real([](Scenario& s) -> double& { return s.uwb.packet_loss; }, 0, 1);
+    m["uwb.channel_diagnostics"] = flag([](Scenario& s) -> bool& { return s.uwb.channel_diagnostics; });
+    m["uwb.outage"] = [](Scenario& s, const std::string& v, std::string* why) {
+      double x[2] = {0, 0};
+      if (!parse_numbers(v, 2, x, why)) return false;
+      if (!(x[1] > x[0]) || x[0] < 0.0) {
+        *why = "outage needs 0 <= START_S < END_S";
+        return false;
+      }
+      s.uwb.outages.push_back(Outage{x[0], x[1]});
+      return true;
+    };
+    // [nlos]
+    m["nlos.box"] = [](Scenario& s, const std::string& v, std::string* why) {
+      double x[6] = {0, 0, 0, 0, 0, 0};
+      if (!parse_numbers(v, 6, x, why)) return false;
+      Box b;
+      for (int i = 0; i < 3; ++i) {
+        b.min_nav_m[i] = x[i];
+        b.max_nav_m[i] = x[i + 3];
+        if (!(b.max_nav_m[i] > b.min_nav_m[i])) {
+          *why = "box needs XMIN YMIN ZMIN XMAX YMAX ZMAX with max > min";
+          return false;
+        }
+      }
+      s.nlos.boxes.push_back(b);
+      return true;
+    };
+    m["nlos.box_bias_mean_m"] = real([](Scenario& s) -> double& { return s.nlos.box_bias_mean_m; }, 0, 100);
+    m["nlos.box_extra_sigma_m"] = real([](Scenario& s) -> double& { return s.nlos.box_extra_sigma_m; }, 0, 100);
+    m["nlos.body_block"] = flag([](Scenario& s) -> bool& { return s.nlos.body_block; });
+    m["nlos.body_cone_deg"] = real([](Scenario& s) -> double& { return s.nlos.body_cone_deg; }, 0, 180);
+    m["nlos.body_bias_mean_m"] = real([](Scenario& s) -> double& { return s.nlos.body_bias_mean_m; }, 0, 100);
+    m["nlos.body_extra_sigma_m"] = real([](Scenario& s) -> double& { return s.nlos.body_extra_sigma_m; }, 0, 100);
+    m["nlos.bias_shape"] = real([](Scenario& s) -> double& { return s.nlos.bias_shape; }, 0, 3);
+    m["nlos.bias_jitter_shape"] = real([](Scenario& s) -> double& { return s.nlos.bias_jitter_shape; }, 0, 3);
+    m["nlos.outlier_prob"] = real([](Scenario& s) -> double& { return s.nlos.outlier_prob; }, 0, 1);
+    m["nlos.outlier_min_m"] = real([](Scenario& s) -> double& { return s.nlos.outlier_min_m; }, 0.01, kBig);
+    m["nlos.outlier_max_m"] = real([](Scenario& s) -> double& { return s.nlos.outlier_max_m; }, 0.01, kBig);
+    m["nlos.outlier_positive_prob"] =
+        real([](Scenario& s) -> double& { return s.nlos.outlier_positive_prob; }, 0, 1);
+    m["nlos.protocol"] = flag([](Scenario& s) -> bool& { return s.nlos.protocol; });
+    m["nlos.protocol_fraction"] = real([](Scenario& s) -> double& { return s.nlos.protocol_fraction; }, 0, 1);
+    m["nlos.protocol_mean_min_m"] = real([](Scenario& s) -> double& { return s.nlos.protocol_mean_min_m; }, 0, 100);
+    m["nlos.protocol_mean_max_m"] = real([](Scenario& s) -> double& { return s.nlos.protocol_mean_max_m; }, 0, 100);
+    m["nlos.protocol_spread_m"] = real([](Scenario& s) -> double& { return s.nlos.protocol_spread_m; }, 0, 100);
+    // [channel]
+    m["channel.rx_power_1m_dbm"] =
+        real([](Scenario& s) -> double& { return s.channel.rx_power_1m_dbm; }, -150, 30);
+    m["channel.path_loss_exponent"] =
+        real([](Scenario& s) -> double& { return s.channel.path_loss_exponent; }, 0.5, 6);
+    m["channel.shadowing_sigma_db"] =
+        real([](Scenario& s) -> double& { return s.channel.shadowing_sigma_db; }, 0, 30);
+    m["channel.nlos_extra_loss_db"] =
+        real([](Scenario& s) -> double& { return s.channel.nlos_extra_loss_db; }, 0, 60);
+    m["channel.los_gap_mean_db"] = real([](Scenario& s) -> double& { return s.channel.los_gap_mean_db; }, 0, 60);
+    m["channel.los_gap_sigma_db"] = real([](Scenario& s) -> double& { return s.channel.los_gap_sigma_db; }, 0, 30);
+    m["channel.nlos_gap_mean_db"] = real([](Scenario& s) -> double& { return s.channel.nlos_gap_mean_db; }, 0, 60);
+    m["channel.nlos_gap_sigma_db"] =
+        real([](Scenario& s) -> double& { return s.channel.nlos_gap_sigma_db; }, 0, 30);
+    // [vehicle]
+    m["vehicle.roll_gain_deg_per_mps2"] =
+        real([](Scenario& s) -> double& { return s.vehicle.roll_gain_deg_per_mps2; }, -10, 10);
+    m["vehicle.pitch_gain_deg_per_mps2"] =
+        real([](Scenario& s) -> double& { return s.vehicle.pitch_gain_deg_per_mps2; }, -10, 10);
+    // [route]
+    m["route.start"] = [](Scenario& s, const std::string& v, std::string* why) {
+      double x[4] = {0, 0, 0, 0};
+      if (!parse_numbers(v, 4, x, why)) return false;
+      for (int i = 0; i < 3; ++i) s.route.start_nav_m[i] = x[i];
+      s.route.start_heading_deg = x[3];
+      return true;
+    };
+    m["route.loop_from"] = [](Scenario& s, const std::string& v, std::string* why) {
+      unsigned long idx = 0;
+      if (!parse_id(v, 1000000, idx, why)) return false;
+      s.route.loop_from = static_cast<size_t>(idx);
+      return true;
+    };
+    m["route.maneuver"] = [](Scenario& s, const std::string& v, std::string* why) {
+      const std::vector<std::string> w = split_ws(v);
+      Maneuver mv;
+      size_t nargs = 0;
+      if (w.empty()) {
+        *why = "empty maneuver";
+        return false;
+      }
+      if (w[0] == "hold") {
+        mv.kind = ManeuverKind::kHold;
+        nargs = 1;
+      } else if (w[0] == "speed") {
+        mv.kind = ManeuverKind::kSpeed;
+        nargs = 2;
+      } else if (w[0] == "turn") {
+        mv.kind = ManeuverKind::kTurn;
+        nargs = 2;
+      } else if (w[0] == "climb") {
+        mv.kind = ManeuverKind::kClimb;
+        nargs = 2;
+      } else {
+        *why = "unknown maneuver '" + w[0] + "' (hold, speed, turn, climb)";
+        return false;
+      }
+      if (w.size() != nargs + 1) {
+        *why = "maneuver '" + w[0] + "' needs " + std::to_string(nargs) + " number(s)";
+        return false;
+      }
+      double x[2] = {0, 0};
+      for (size_t i = 0; i < nargs; ++i) {
+        if (!parse_double(w[i + 1], x[i])) {
+          *why = "not a finite number: '" + w[i + 1] + "'";
+          return false;
+        }
+      }
+      mv.duration_s = nargs == 1 ? x[0] : x[1];
+      mv.value = nargs == 1 ? 0.0 : x[0];
+      if (!(mv.duration_s >= 0.1) || mv.duration_s > 1e6) {
+        *why = "maneuver duration must be in [0.1, 1e6] s";
+        return false;
+      }
+      if (mv.kind == ManeuverKind::kSpeed && (mv.value < 0.0 || mv.value > 100.0)) {
+        *why = "speed must be in [0, 100] m/s";
+        return false;
+      }
+      s.route.maneuvers.push_back(mv);
+      return true;
+    };
+    return m;
+  }();
+  return table;
+}
+
+Status fail(std::string* error, const std::string& msg) {
+  if (error != nullptr) *error = msg;
+  return Status::kInvalidArgument;
+}
+
+Status parse_into(const std::string& text, const std::string& origin, Scenario& out, std::string* error,
+                  int depth) {
+  std::istringstream is(text);
+  std::string line;
+  std::string section;
+  int line_no = 0;
+  bool seen_key = false;
+  while (std::getline(is, line)) {
+    ++line_no;
+    const std::string where = origin + ":" + std::to_string(line_no) + ": ";
+    const size_t hash = line.find('#');
+    if (hash != std::string::npos) line.erase(hash);
+    line = trim(line);
+    if (line.empty()) continue;
+    if (line.front() == '[') {
+      if (line.back() != ']' || line.size() < 3) return fail(error, where + "bad section header '" + line + "'");
+      section = trim(line.substr(1, line.size() - 2));
+      static const std::set<std::string> kSections = {"scenario", "site",    "imu",    "uwb",
+                                                      "nlos",     "channel", "vehicle", "route"};
+      if (kSections.count(section) == 0) return fail(error, where + "unknown section [" + section + "]");
+      continue;
+    }
+    const size_t eq = line.find('=');
+    if (eq == std::string::npos) return fail(error, where + "expected 'key = value'");
+    const std::string key = trim(line.substr(0, eq));
+    const std::string value = trim(line.substr(eq + 1));
+    if (key.empty()) return fail(error, where + "missing key before '='");
+    if (section.empty()) {
+      if (key != "base") return fail(error, where + "key '" + key + "' outside a section (only 'base' allowed)");
+      if (seen_key) return fail(error, where + "'base' must come before any other key");
+      if (depth > 0) return fail(error, where + "a preset cannot have a base");
+      const std::string base = preset_text(value);
+      if (base.empty()) return fail(error, where + "unknown base preset '" + value + "'");
+      const Status st = parse_into(base, value, out, error, depth + 1);
+      if (!ok(st)) return st;
+      seen_key = true;
+      continue;
+    }
+    seen_key = true;
+    const auto it = setters().find(section + "." + key);
+    if (it == setters().end()) return fail(error, where + "unknown key '" + key + "' in [" + section + "]");
+    std::string why;
+    if (!it->second(out, value, &why)) return fail(error, where + key + ": " + why);
+  }
+  return Status::kOk;
+}
+
+}  // namespace
+
+std::vector<std::string> scenario_keys() {
+  std::vector<std::string> keys;
+  keys.reserve(setters().size());
+  for (const auto& kv : setters()) keys.push_back(kv.first);
+  return keys;
+}
+
+Status parse_scenario(const std::string& text, const std::string& origin, Scenario& out, std::string* error) {
+  Scenario s;
+  const Status st = parse_into(text, origin, s, error, 0);
+  if (!ok(st)) return st;
+  // The recording carries gravity, anchors and lever arms as floats; simulate
+  // with exactly those values so the estimator sees the simulated site.
+  const auto to_float = [](double& x) { x = static_cast<double>(static_cast<float>(x)); };
+  to_float(s.gravity_mps2);
+  for (AnchorDef& a : s.anchors) {
+    for (double& x : a.pos_nav_m) to_float(x);
+  }
+  for (TagDef& t : s.tags) {
+    for (double& x : t.lever_body_m) to_float(x);
+  }
+  const Status v = validate_scenario(s, error);
+  if (!ok(v)) {
+    if (error != nullptr) *error = origin + ": " + *error;
+    return v;
+  }
+  out = std::move(s);
+  return Status::kOk;
+}
+
+Status load_scenario(const std::string& name_or_path, Scenario& out, std::string* error) {
+  const std::string preset = preset_text(name_or_path);
+  if (!preset.empty()) return parse_scenario(preset, name_or_path, out, error);
+  std::ifstream f(name_or_path, std::ios::binary);
+  if (!f) {
+    if (error != nullptr) *error = "'" + name_or_path + "' is neither a preset nor a readable scenario file";
+    return Status::kNotFound;
+  }
+  std::ostringstream ss;
+  ss << f.rdbuf();
+  return parse_scenario(ss.str(), name_or_path, out, error);
+}
+
+Status validate_scenario(const Scenario& s, std::string* error) {
+  if (s.anchors.empty()) return fail(error, "no anchor (site.anchor = ID X Y Z)");
+  if (s.anchors.size() > kMaxAnchors) return fail(error, "too many anchors (max " + std::to_string(kMaxAnchors) + ")");
+  if (s.tags.empty()) return fail(error, "no tag (site.tag = ID X Y Z)");
+  if (s.tags.size() > kMaxTags) return fail(error, "too many tags (max " + std::to_string(kMaxTags) + ")");
+  std::set<uint16_t> anchor_ids;
+  for (const AnchorDef& a : s.anchors) {
+    if (!anchor_ids.insert(a.id).second) return fail(error, "duplicate anchor id " + std::to_string(a.id));
+  }
+  std::set<uint8_t> tag_ids;
+  for (const TagDef& t : s.tags) {
+    if (!tag_ids.insert(t.id).second) return fail(error, "duplicate tag id " + std::to_string(t.id));
+  }
+  const double imu_period_us = 1e6 / s.imu.rate_hz;
+  if (std::fabs(imu_period_us - std::round(imu_period_us)) > 1e-6) {
+    return fail(error, "imu.rate_hz must divide 1e6 us into an integer period");
+  }
+  const double uwb_period_us = 1e6 / s.uwb.rate_hz;
+  if (std::fabs(uwb_period_us - std::round(uwb_period_us)) > 1e-6) {
+    return fail(error, "uwb.rate_hz must divide 1e6 us into an integer period");
+  }
+  if (s.uwb.offset_ms * 1e3 >= uwb_period_us) return fail(error, "uwb.offset_ms must be shorter than the range period");
+  if (s.nlos.outlier_max_m < s.nlos.outlier_min_m) return fail(error, "nlos.outlier_max_m < nlos.outlier_min_m");
+  if (s.nlos.protocol_mean_max_m < s.nlos.protocol_mean_min_m) {
+    return fail(error, "nlos.protocol_mean_max_m < nlos.protocol_mean_min_m");
+  }
+  if (!s.route.maneuvers.empty() && s.route.loop_from >= s.route.maneuvers.size()) {
+    return fail(error, "route.loop_from must index a maneuver (0.." + std::to_string(s.route.maneuvers.size() - 1) +
+                           ")");
+  }
+  return Status::kOk;
+}
+
+}  // namespace uwbnav::sim
