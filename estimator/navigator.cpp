@@ -23,6 +23,8 @@ int64_t diff_us(uint64_t a, uint64_t b) { return static_cast<int64_t>(a) - stati
 constexpr uint64_t kMinImuDtUs = 100;
 // ZUPT only when the filter speed is also below this [m/s].
 constexpr Real kZuptMaxSpeed_mps = Real(0.3);
+// ... and the horizontal specific force below this (a steady brake is not rest) [m/s^2].
+constexpr Real kRestMaxHorizAccel_mps2 = Real(0.1);
 
 }  // namespace
 
@@ -169,8 +171,12 @@ void Navigator::apply_constraints(uint64_t t_us) {
   if (height_on_) (void)fuse(mm_height(ekf_.state(), height_ref_m_, cfg_.height_sigma));
   if (!cfg_.ground_constraints || cv_mode_) return;
   rest_.evaluate();
-  // The IMU alone cannot tell rest from constant velocity: the filter must agree.
-  if (rest_.at_rest() && ekf_.state().vel_nav_mps.norm() < kZuptMaxSpeed_mps) {
+  // The IMU's spread alone cannot tell rest from constant velocity or a steady
+  // brake: the filter speed must be small and the mean specific force vertical.
+  const Vec3 f_nav = ekf_.dcm() * (rest_.accel_mean() - ekf_.state().ba_body_mps2);
+  const bool at_rest = rest_.at_rest() && ekf_.state().vel_nav_mps.norm() < kZuptMaxSpeed_mps &&
+                       f_nav.head<2>().norm() < kRestMaxHorizAccel_mps2;
+  if (at_rest) {
     for (int i = 0; i < 3; ++i) {
       (void)fuse(mm_zupt(ekf_.state(), i, cfg_.zupt_sigma));
     }

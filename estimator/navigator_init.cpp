@@ -13,8 +13,10 @@ constexpr uint64_t kMaxWindowUs = 10000000;       // fix window growth limit [us
 constexpr uint64_t kLevelWithoutRestUs = 3000000;  // level from the mean specific force after this [us]
 constexpr uint64_t kTwoTagSyncUs = 200000;        // two-tag fixes closer than this pair up [us]
 constexpr uint64_t kTrackMaxSpanUs = 20000000;    // heading chord: longest time span [us]
-constexpr Real kStraightYawRad = Real(0.35);       // heading chord: largest turn along it [rad]
+constexpr Real kMinChord_m = Real(0.5);            // heading: shortest chord of the LS track [m]
+constexpr Real kMaxChordSpreadRad = Real(0.35);    // heading: largest disagreement between chords [rad]
 constexpr Real kMinBaseline_m = Real(0.3);         // two-tag heading: shortest horizontal baseline [m]
+constexpr uint64_t kTrackSpacingUs = 100000;      // track: shortest interval between stored fixes [us]
 constexpr uint64_t kTrackFreshUs = 1000000;       // rest check: LS track span looked at [us]
 constexpr Real kRestTrackDist_m = Real(0.1);       // rest check: allowed track motion beyond noise [m]
 
@@ -82,6 +84,21 @@ void Navigator::init_on_imu(const ImuSample& imu) {
   }
 }
 
+bool Navigator::track_moving(uint64_t t_us) const {
+  if (track_count_ == 0) return false;
+  const size_t newest = (track_head_ + kTrackCapacity - 1) % kTrackCapacity;
+  const TrackFix& fn = track_[newest];
+  if (t_us - fn.t_us > kTrackFreshUs) return false;  // no recent fixes: no evidence of motion
+  for (size_t k = 1; k < track_count_; ++k) {
+    const TrackFix& f = track_[(newest + kTrackCapacity - k) % kTrackCapacity];
+    if (f.tag_index != fn.tag_index) continue;
+    if (fn.t_us - f.t_us > kTrackFreshUs) break;
+    const Real d = (fn.tag_pos_nav_m - f.tag_pos_nav_m).head<2>().norm();
+    if (d > Real(3) * (fn.sigma_h_m + f.sigma_h_m) + kRestTrackDist_m) return true;
+  }
+  return false;
+}
+
 bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix) {
   LsRange ranges[kMaxAnchors];
   size_t n = 0;
@@ -138,9 +155,13 @@ void Navigator::init_on_range(int anchor_index, int tag_index, const UwbRange& r
   if (got_fix) {
     have_fix_ = true;
     last_fix_origin_nav_m_ = fix.tag_pos_nav_m - quat_to_dcm(q_init_) * lever(tag_index);
-    track_[track_head_] = fix;
-    track_head_ = (track_head_ + 1) % kTrackCapacity;
-    if (track_count_ < kTrackCapacity) ++track_count_;
+    // Thin the track to ~10 Hz so the ring spans the first metres even when slow.
+    const TrackFix& prev = track_[(track_head_ + kTrackCapacity - 1) % kTrackCapacity];
+    if (track_count_ == 0 || fix.t_us - prev.t_us >= kTrackSpacingUs || prev.tag_index != fix.tag_index) {
+      track_[track_head_] = fix;
+      track_head_ = (track_head_ + 1) % kTrackCapacity;
+      if (track_count_ < kTrackCapacity) ++track_count_;
+    }
     last_fix_per_tag_[tag_index] = fix;
   }
   if (!have_fix_) return;
@@ -184,37 +205,54 @@ void Navigator::try_heading(uint64_t t_us) {
       return;
     }
   }
-  // (b) Ground vehicles move forward: direction of the first metres of track.
+  // (b) Ground vehicles move forward: each chord of the LS track points along
+  // the body x axis at mid-chord, whose gyro-relative yaw is known; the
+  // length-weighted circular mean of (chord direction - relative yaw) over the
+  // first metres is the start yaw. Works on curved tracks too.
   if (site_.platform != Platform::kGround || track_count_ < 2) return;
   const size_t newest = (track_head_ + kTrackCapacity - 1) % kTrackCapacity;
   const TrackFix& fn = track_[newest];
-  const TrackFix* fk = nullptr;
-  const TrackFix* fv = nullptr;  // >= 0.5 s older: velocity chord
-  for (size_t k = 1; k < track_count_; ++k) {
+  const TrackFix* end = &fn;  // end of the chord being built (walking back in time)
+  const TrackFix* fv = nullptr;  // >= 0.5 s older than the newest: velocity chord
+  Real sum_c = Real(0), sum_s = Real(0), length = Real(0), sig_sum = Real(0);
+  Real est_min = Real(10), est_max = Real(-10), first_est = Real(0);
+  int chords = 0;
+  for (size_t k = 1; k < track_count_ && length < cfg_.init_heading_dist; ++k) {
     const TrackFix& f = track_[(newest + kTrackCapacity - k) % kTrackCapacity];
     if (f.tag_index != fn.tag_index) continue;
     if (fn.t_us - f.t_us > kTrackMaxSpanUs) break;
     if (fv == nullptr && fn.t_us - f.t_us >= 500000) fv = &f;
-    if ((fn.tag_pos_nav_m - f.tag_pos_nav_m).head<2>().norm() >= cfg_.init_heading_dist) {
-      fk = &f;
-      break;
-    }
+    const Vec3 chord = end->tag_pos_nav_m - f.tag_pos_nav_m;
+    const Real d = chord.head<2>().norm();
+    const Real sig = std::sqrt(end->sigma_h_m * end->sigma_h_m + f.sigma_h_m * f.sigma_h_m);
+    if (d < kMinChord_m || d < Real(5) * sig) continue;
+    const Real turn = wrap_pi(end->yaw_rel_rad - f.yaw_rel_rad);
+    const Real est = std::atan2(chord.y(), chord.x()) - (f.yaw_rel_rad + Real(0.5) * turn);
+    // Unwrap relative to the first chord's estimate before judging the spread.
+    const Real rel = chords == 0 ? Real(0) : wrap_pi(est - first_est);
+    if (chords == 0) first_est = est;
+    est_min = std::fmin(est_min, rel);
+    est_max = std::fmax(est_max, rel);
+    sum_c += d * std::cos(est);
+    sum_s += d * std::sin(est);
+    length += d;
+    sig_sum += sig;
+    ++chords;
+    end = &f;
   }
-  if (fk == nullptr || fv == nullptr) return;
-  const Real turn = wrap_pi(fn.yaw_rel_rad - fk->yaw_rel_rad);
-  if (std::fabs(turn) > kStraightYawRad) return;
-  const Vec3 chord = fn.tag_pos_nav_m - fk->tag_pos_nav_m;
-  const Real d = chord.head<2>().norm();
-  const Real psi = std::atan2(chord.y(), chord.x());
-  const Real yaw_rel_mid = fk->yaw_rel_rad + Real(0.5) * turn;
-  const Real yaw0 = wrap_pi(psi - yaw_rel_mid);
+  if (length < cfg_.init_heading_dist || fv == nullptr || chords == 0) return;
+  // Chords disagreeing by more than this are not forward driving (reversing, sliding).
+  if (est_max - est_min > kMaxChordSpreadRad) return;
+  const Real yaw0 = wrap_pi(std::atan2(sum_s, sum_c));
   const Real dt_v = static_cast<Real>(fn.t_us - fv->t_us) * Real(1e-6);
   Vec3 vel = (fn.tag_pos_nav_m - fv->tag_pos_nav_m) / dt_v;
   vel.z() = Real(0);
-  const Real sig = std::sqrt(fn.sigma_h_m * fn.sigma_h_m + fk->sigma_h_m * fk->sigma_h_m);
-  const Real vel_sigma = Real(0.3) + Real(2) * std::sqrt(fn.sigma_h_m * fn.sigma_h_m + fv->sigma_h_m * fv->sigma_h_m) / dt_v;
-  // Yaw: chord direction error plus an allowance for side slip and the turn along the chord.
-  const Real yaw_sigma = std::atan2(Real(2) * sig, d) + Real(0.03) + Real(0.5) * std::fabs(turn);
+  const Real vel_sigma =
+      Real(0.3) + Real(2) * std::sqrt(fn.sigma_h_m * fn.sigma_h_m + fv->sigma_h_m * fv->sigma_h_m) / dt_v;
+  // Yaw: chord direction noise, side slip allowance and the chords' spread.
+  const Real yaw_sigma = std::atan2(Real(2) * sig_sum / static_cast<Real>(chords), length / static_cast<Real>(chords)) /
+                             std::sqrt(static_cast<Real>(chords)) +
+                         Real(0.03) + Real(0.5) * (est_max - est_min);
   start_filter(t_us, fn, yaw0, yaw_sigma, vel, vel_sigma);
 }
 

@@ -46,6 +46,7 @@ constexpr bool ok(Status s) { return s == Status::kOk; }
 
 // Explicitly discard a status where ignoring it is the intended behaviour.
 constexpr void ignore_status(Status) {}
+constexpr void ignore_result(bool) {}
 
 // Value-or-status. T must be default constructible (firmware types are PODs).
 template <typename T>

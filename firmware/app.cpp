@@ -12,6 +12,9 @@ Status App::init() {
   if (board_.site.uwb_sigma_m > 0.0F) ignore_status(params_.set(ParamId::kUwbSigma, board_.site.uwb_sigma_m));
   ignore_status(load_params());  // empty or corrupt store: defaults stay
   validator_.configure(board_.site, params_);
+  can_tx_.configure(params_);
+  can_decoder_.configure(params_);
+  hil_rx_enabled_ = params_[ParamId::kCanHilRxEnable] > 0.5F;
   const Status s = nav_.configure(board_.site, params_);
   initialised_ = ok(s);
   return s;
@@ -27,6 +30,9 @@ void App::apply_params(const Params& params) {
   params_ = params;
   validator_.update_params(params_);
   nav_.update_params(params_);
+  can_tx_.configure(params_);
+  can_decoder_.configure(params_);
+  hil_rx_enabled_ = params_[ParamId::kCanHilRxEnable] > 0.5F;
 }
 
 Status App::save_params() {
@@ -65,6 +71,30 @@ void App::record_cycle_timing(uint32_t work_us, uint32_t jitter_us, bool overrun
   if (overrun) ++l.overruns;
 }
 
+bool App::accept_imu(const ImuSample& imu, uint64_t now_us, SourceStats& src) {
+  ++src.received;
+  const Verdict v = validator_.check_imu(imu, now_us);
+  if (!v.accepted) {
+    ++src.rejected[static_cast<size_t>(v.reason)];
+    return false;
+  }
+  ++src.accepted;
+  imu_buf_[imu_count_++] = imu;
+  return true;
+}
+
+bool App::accept_uwb(const UwbRange& r, uint64_t now_us, SourceStats& src) {
+  ++src.received;
+  const Verdict v = validator_.check_uwb(r, now_us);
+  if (!v.accepted) {
+    ++src.rejected[static_cast<size_t>(v.reason)];
+    return false;
+  }
+  ++src.accepted;
+  uwb_buf_[uwb_count_++] = r;
+  return true;
+}
+
 void App::drain_sensors(uint64_t now_us) {
   imu_count_ = 0;
   uwb_count_ = 0;
@@ -76,14 +106,7 @@ void App::drain_sensors(uint64_t now_us) {
       break;
     }
     if (!ok(s)) break;
-    ++stats_.imu.received;
-    const Verdict v = validator_.check_imu(imu, now_us);
-    if (!v.accepted) {
-      ++stats_.imu.rejected[static_cast<size_t>(v.reason)];
-      continue;
-    }
-    ++stats_.imu.accepted;
-    imu_buf_[imu_count_++] = imu;
+    ignore_result(accept_imu(imu, now_us, stats_.imu));
   }
   UwbRange r;
   while (uwb_count_ < kMaxUwbPerCycle) {
@@ -93,19 +116,37 @@ void App::drain_sensors(uint64_t now_us) {
       break;
     }
     if (!ok(s)) break;
-    ++stats_.uwb.received;
-    const Verdict v = validator_.check_uwb(r, now_us);
-    if (!v.accepted) {
-      ++stats_.uwb.rejected[static_cast<size_t>(v.reason)];
+    ignore_result(accept_uwb(r, now_us, stats_.uwb));
+  }
+  if (hil_rx_enabled_) drain_can_sensors(now_us);
+}
+
+// HIL rigs inject sensors as CAN frames (docs/can.md); the decoder checks the
+// transport (E2E), the validator the physics, exactly as for any other source.
+void App::drain_can_sensors(uint64_t now_us) {
+  hal::CanFrame f;
+  for (size_t n = 0; n < kMaxCanRxPerCycle; ++n) {
+    if (imu_count_ >= kMaxImuPerCycle || uwb_count_ >= kMaxUwbPerCycle) break;
+    if (!ok(board_.can.receive(f))) break;
+    can::CanSensorSample sample;
+    const Status s = can_decoder_.on_frame(f, now_us, sample);
+    if (s == Status::kRejected) {
+      ++stats_.can_rx.received;
+      ++stats_.can_rx.io_errors;
       continue;
     }
-    ++stats_.uwb.accepted;
-    uwb_buf_[uwb_count_++] = r;
+    if (!ok(s)) continue;
+    if (sample.kind == can::SensorKind::kImu) {
+      ignore_result(accept_imu(sample.imu, now_us, stats_.can_rx));
+    } else if (sample.kind == can::SensorKind::kUwb) {
+      ignore_result(accept_uwb(sample.uwb, now_us, stats_.can_rx));
+    }
   }
 }
 
 void App::handle_range(const UwbRange& r) {
   const RangeReport rep = nav_.on_range(r);
+  can_diag_.set_anchor_nlos(board_.site.find_anchor(rep.anchor_id), rep.nlos);
   if (observer_ != nullptr) observer_->on_range(rep);
 }
 
@@ -132,6 +173,9 @@ void App::tick(uint64_t now_us) {
     process_in_time_order();
     last_output_ = nav_.output(now_us);
     if (observer_ != nullptr) observer_->on_output(last_output_);
+    can_diag_.set_from_stats(stats_);
+    can_diag_.resets = last_output_.resets;
+    can_tx_.on_cycle(now_us, last_output_, can_diag_, board_.can);
   }
   console_.poll(now_us);
 }

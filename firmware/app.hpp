@@ -9,6 +9,8 @@
 #include "estimator/navigator.hpp"
 #include "estimator/params.hpp"
 #include "firmware/app_stats.hpp"
+#include "firmware/can/publisher.hpp"
+#include "firmware/can/sensor_decoder.hpp"
 #include "firmware/console/console.hpp"
 #include "firmware/input_validator.hpp"
 #include "hal/hal.hpp"
@@ -18,6 +20,7 @@ namespace uwbnav {
 constexpr uint32_t kCyclePeriodUs = 10000;  // 100 Hz loop
 constexpr size_t kMaxImuPerCycle = 32;      // frames drained per cycle; more wait for the next cycle
 constexpr size_t kMaxUwbPerCycle = 32;
+constexpr size_t kMaxCanRxPerCycle = 64;    // HIL input frames read per cycle
 
 // Host-side tap on what the firmware computed (replay writers, tests, HIL).
 // The firmware calls it synchronously; implementations must not block.
@@ -60,9 +63,14 @@ class App {
   uint64_t last_tick_us() const { return last_tick_us_; }
   hal::Board& board() { return board_; }
   Console& console() { return console_; }
+  const can::CanTxStats& can_tx_stats() const { return can_tx_.stats(); }
+  const can::CanSensorStats& can_rx_stats() const { return can_decoder_.stats(); }
 
  private:
   void drain_sensors(uint64_t now_us);
+  void drain_can_sensors(uint64_t now_us);
+  [[nodiscard]] bool accept_imu(const ImuSample& imu, uint64_t now_us, SourceStats& src);
+  [[nodiscard]] bool accept_uwb(const UwbRange& r, uint64_t now_us, SourceStats& src);
   void process_in_time_order();
   void handle_range(const UwbRange& r);
 
@@ -70,6 +78,10 @@ class App {
   Params params_;
   Navigator nav_;
   InputValidator validator_;
+  can::CanPublisher can_tx_;
+  can::CanDiag can_diag_;
+  can::CanSensorDecoder can_decoder_;
+  bool hil_rx_enabled_ = false;
   AppStats stats_;
   AppObserver* observer_ = nullptr;
   NavOutput last_output_;

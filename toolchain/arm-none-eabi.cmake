@@ -27,7 +27,7 @@ set(CMAKE_CXX_FLAGS_INIT "${UWBNAV_ARM_COMMON_FLAGS} -fno-exceptions -fno-rtti -
 set(CMAKE_ASM_FLAGS_INIT "${UWBNAV_ARM_CPU_FLAGS}")
 # The board's CMakeLists adds its linker script (-T) and map file; the startup
 # code is the board's own (hal/mps2/startup.cpp), not picolibc's crt0.
-set(CMAKE_EXE_LINKER_FLAGS_INIT "-specs=picolibc.specs -nostartfiles -Wl,--gc-sections")
+set(CMAKE_EXE_LINKER_FLAGS_INIT "-nostartfiles -Wl,--gc-sections")
 
 # Host programs (python, qemu) from the host; libraries and headers never.
 set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)

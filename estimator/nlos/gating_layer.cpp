@@ -29,11 +29,11 @@ float distance_m(const Vec3f& a, const Vec3f& b) {
 }
 
 // Innovation evidence of the default policy: logistic in the normalised
-// innovation, 0.5 at z0, clipped to [0.02, 0.98] so no single source is certain.
+// innovation, 0.5 at z0, clipped to [0.005, 0.995] so no single source is certain.
 float innovation_p_nlos(float z, float z0) {
   if (!std::isfinite(z)) return kNaNf;
   const float p = 1.0F / (1.0F + std::exp(-2.0F * (z - z0)));
-  return std::fmin(std::fmax(p, 0.02F), 0.98F);
+  return std::fmin(std::fmax(p, 0.005F), 0.995F);
 }
 
 }  // namespace
@@ -79,14 +79,16 @@ void GatingLayer::update_params(const Params& params) {
   escape_r_scale_ = params[ParamId::kGateEscapeRScale];
   default_nlos_ = params[ParamId::kGateDefaultNlos];
   innov_z0_ = params[ParamId::kGateInnovZ0];
+  verify_frac_ = params[ParamId::kGateVerifyFrac];
 }
 
 void GatingLayer::reset() {
   for (Slot& s : slots_) s = Slot{};
   now_us_ = 0;
   last_fused_t_us_ = 0;
-  have_fused_ = false;
+  seen_ready_ = false;
   escape_active_ = false;
+  los_share_ = 0.0F;
 }
 
 GatingAnchorStats GatingLayer::anchor_stats(size_t anchor_index) const {
@@ -288,26 +290,36 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
     const float factor = residual_inflation_factor(e.z, resid_th_, resid_beta_);
     if (std::isfinite(factor)) d.r_scale = factor;
   }
-  // Escape: nothing fused for escape_s while ranges keep arriving means the filter may have
-  // drifted away from its own gate. Admit ranges the filter-independent evidence calls LOS,
-  // with R inflated so that the consistent majority pulls the filter back gently.
+  // Robust mode (the escape): a filter that has just become ready is unverified (its fix
+  // may be biased by NLOS ranges), and a filter that fused nothing for escape_s while
+  // ranges kept arriving may have drifted away from its own gate. In robust mode every
+  // finite range is fused with R inflated by the seed 003 factor of its residual (at least
+  // escape_r_scale): an iteratively reweighted update in which the consistent ranges
+  // dominate. It ends when the running share of ranges within resid_th sigma exceeds
+  // verify_frac (the filter agrees with the measurements again).
   if (ctx.filter_ready && escape_us_ > 0) {
-    if (!have_fused_) {
-      have_fused_ = true;
+    if (!seen_ready_) {  // first converged prediction: start verified only by the data
+      seen_ready_ = true;
       last_fused_t_us_ = ctx.range.t_us;
+      escape_active_ = true;
+      ++escape_entries_;
+      los_share_ = 0.0F;
     }
     if (!escape_active_ && ctx.range.t_us - last_fused_t_us_ > escape_us_) {
       escape_active_ = true;
       ++escape_entries_;
+      los_share_ = 0.0F;
     }
-    if (escape_active_ && !d.use) {
-      const float independent[3] = {e.p_svm2, e.p_mc, e.p_chan};
-      const float r_ind = ds_combine_all(independent, 3);
-      if (!(r_ind > default_nlos_) && std::isfinite(ctx.range.range_m)) {
-        d.use = true;
-        d.r_scale = escape_r_scale_;
-        ++slot.stats.escape_count;
-      }
+    if (std::isfinite(e.z)) {
+      constexpr float kShareGain = 0.02F;  // EMA over about 50 ranges
+      los_share_ += kShareGain * ((e.z < resid_th_ ? 1.0F : 0.0F) - los_share_);
+    }
+    if (escape_active_ && los_share_ > verify_frac_) escape_active_ = false;
+    if (escape_active_ && std::isfinite(ctx.innovation_m)) {
+      const float factor = residual_inflation_factor(e.z, resid_th_, resid_beta_);
+      d.use = true;
+      d.r_scale = std::isfinite(factor) ? std::fmax(factor, escape_r_scale_) : escape_r_scale_;
+      ++slot.stats.escape_count;
     }
   }
   return d;
@@ -359,13 +371,11 @@ GatingDecision GatingLayer::assess(const RangeContext& ctx) {
 }
 
 void GatingLayer::on_result(const RangeContext& ctx, const GatingDecision& d, bool fused) {
+  (void)d;
   if (!fused) return;
   const int si = slot_index(ctx);
   if (si >= 0) ++slots_[si].stats.used_count;
-  have_fused_ = true;
   last_fused_t_us_ = ctx.range.t_us;
-  // A range fused without the escape inflation means the filter accepts ranges again.
-  if (escape_active_ && d.r_scale < escape_r_scale_) escape_active_ = false;
 }
 
 }  // namespace uwbnav

@@ -50,6 +50,8 @@ class GatingLayer {
   void on_result(const RangeContext& ctx, const GatingDecision& d, bool fused);
 
   GatingPolicy policy() const { return policy_; }
+  // Robust mode of the default policy: after the filter first converges and after
+  // escape_s without any fused range (see decide_default, docs/nlos.md).
   bool escape_active() const { return escape_active_; }
   uint32_t escape_entries() const { return escape_entries_; }
   // Counters of anchor `anchor_index` (index into SiteConfig::anchors).
@@ -129,13 +131,15 @@ class GatingLayer {
   float escape_r_scale_ = 100.0F;
   float default_nlos_ = 0.5F;
   float innov_z0_ = 3.0F;
+  float verify_frac_ = 0.35F;
 
   // Escape state (default policy).
   uint64_t now_us_ = 0;
   uint64_t last_fused_t_us_ = 0;
-  bool have_fused_ = false;
-  bool escape_active_ = false;
+  bool seen_ready_ = false;         // the filter has been ready since the last reset
+  bool escape_active_ = false;      // robust mode (warm-up or escape)
   uint32_t escape_entries_ = 0;
+  float los_share_ = 0.0F;          // EMA of (z < resid_th) over ranges with a prediction
 };
 
 }  // namespace uwbnav

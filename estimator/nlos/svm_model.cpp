@@ -131,37 +131,11 @@ double svm_decision_value(const SvmModel& m, const double* scaled) {
 }
 
 double svm_label0_probability(const SvmModel& m, double decision_value) {
+  // libsvm 3.24 svm_predict_probability, two classes: the pairwise probability of
+  // label[0] is the final estimate (no coupling iteration), clipped to [1e-7, 1 - 1e-7].
   constexpr double kMinProb = 1e-7;
-  double r01 = platt_sigmoid(decision_value, m.prob_a, m.prob_b);
-  r01 = std::fmin(std::fmax(r01, kMinProb), 1.0 - kMinProb);
-  const double r10 = 1.0 - r01;
-  // Pairwise coupling for k = 2 (minimise p^T Q p, sum p = 1), iterated as libsvm does:
-  // Q = [[r10^2, -r10 r01], [-r10 r01, r01^2]], start p = (1/2, 1/2), stop when
-  // max_t |(Qp)_t - p^T Q p| < 0.005 / k, at most 100 sweeps.
-  const double q[2][2] = {{r10 * r10, -r10 * r01}, {-r10 * r01, r01 * r01}};
-  double p[2] = {0.5, 0.5};
-  double qp[2] = {0.0, 0.0};
-  constexpr double kEps = 0.005 / 2.0;
-  constexpr int kMaxIter = 100;
-  for (int iter = 0; iter < kMaxIter; ++iter) {
-    double pqp = 0.0;
-    for (int t = 0; t < 2; ++t) {
-      qp[t] = q[t][0] * p[0] + q[t][1] * p[1];
-      pqp += p[t] * qp[t];
-    }
-    const double err = std::fmax(std::fabs(qp[0] - pqp), std::fabs(qp[1] - pqp));
-    if (err < kEps) break;
-    for (int t = 0; t < 2; ++t) {
-      const double diff = (-qp[t] + pqp) / q[t][t];
-      p[t] += diff;
-      pqp = (pqp + diff * (diff * q[t][t] + 2.0 * qp[t])) / (1.0 + diff) / (1.0 + diff);
-      for (int j = 0; j < 2; ++j) {
-        qp[j] = (qp[j] + diff * q[t][j]) / (1.0 + diff);
-        p[j] /= (1.0 + diff);
-      }
-    }
-  }
-  return p[0];
+  const double p = platt_sigmoid(decision_value, m.prob_a, m.prob_b);
+  return std::fmin(std::fmax(p, kMinProb), 1.0 - kMinProb);
 }
 
 bool svm_build_features(SvmFeatureSet set, float range_rate_mps, float speed_mps, float fp_power_dbm,

@@ -63,9 +63,9 @@ void svm_scale(const SvmModel& model, const float* raw, double* scaled);
 // libsvm decision value of scaled features: sum_i coef_i K(x, sv_i) - rho.
 double svm_decision_value(const SvmModel& model, const double* scaled);
 
-// libsvm 3.24 two-class probability of the model's label[0] class from a decision value:
-// Platt sigmoid clipped to [1e-7, 1-1e-7], then the pairwise-coupling iteration of
-// multiclass_probability (Wu, Lin, Weng method 2) for k = 2.
+// libsvm 3.24 two-class probability of the model's label[0] class from a decision
+// value: Platt sigmoid 1 / (1 + exp(A f + B)) clipped to [1e-7, 1 - 1e-7]; for two
+// classes libsvm takes the pairwise probability as is (no pairwise coupling).
 double svm_label0_probability(const SvmModel& model, double decision_value);
 
 // NLOS probability p1 of raw (unscaled) features. kNotFinite for NaN/Inf features,

@@ -160,6 +160,27 @@ void Console::start_job(Job job, bool verbose) {
   job_ = job;
   job_step_ = 0;
   job_verbose_ = verbose;
+  take_snapshot(job);
+}
+
+void Console::take_snapshot(Job job) {
+  snap_.t_us = app_.last_tick_us();
+  const Navigator& nav = app_.navigator();
+  if (job == Job::kStats) {
+    snap_.app = app_.stats();
+    snap_.nav = nav.diagnostics();
+    snap_.can = app_.board().can.counters();
+    snap_.can_state = app_.board().can.state();
+  } else if (job == Job::kAnchors) {
+    const size_t n = nav.num_anchors();
+    snap_.num_anchors = n < kMaxAnchors ? n : kMaxAnchors;
+    for (size_t i = 0; i < snap_.num_anchors; ++i) snap_.anchors[i] = nav.anchor_status(i);
+  } else if (job == Job::kEkf) {
+    nav.state_vector(snap_.state);
+    for (size_t r = 0; r < Navigator::kErrorStateSize; ++r) {
+      for (size_t c = 0; c < Navigator::kErrorStateSize; ++c) snap_.cov[r][c] = nav.covariance(r, c);
+    }
+  }
 }
 
 bool Console::job_step() {

@@ -10,9 +10,13 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "estimator/navigator.hpp"
+#include "estimator/types.hpp"
+#include "firmware/app_stats.hpp"
 #include "firmware/console/byte_ring.hpp"
 #include "firmware/console/line_editor.hpp"
 #include "firmware/console/log.hpp"
+#include "hal/hal.hpp"
 
 namespace uwbnav {
 
@@ -78,6 +82,20 @@ class Console final : public LogSink {
   };
   enum class Job : uint8_t { kNone, kHelp, kParamList, kAnchors, kEkf, kStats, kHistory };
 
+  // What a multi-line reply reports, copied when the command runs, so that all
+  // its lines describe the same cycle although they go out over several.
+  struct Snapshot {
+    AppStats app;
+    NavDiagnostics nav;
+    hal::CanCounters can;
+    hal::CanBusState can_state = hal::CanBusState::kDown;
+    uint64_t t_us = 0;
+    size_t num_anchors = 0;
+    AnchorStatus anchors[kMaxAnchors];
+    float state[16] = {};
+    float cov[Navigator::kErrorStateSize][Navigator::kErrorStateSize] = {};
+  };
+
   static const Command kCommands[];
   static const size_t kNumCommands;
 
@@ -87,6 +105,7 @@ class Console final : public LogSink {
   void handle_line(const char* line);
   void execute(char* line);
   void start_job(Job job, bool verbose);
+  void take_snapshot(Job job);
   void run_job();
   bool job_step();
   void run_streams();
@@ -146,6 +165,7 @@ class Console final : public LogSink {
   size_t out_len_ = 0;
   uint64_t pending_drop_bytes_ = 0;       // dropped since the last marker
 
+  Snapshot snap_;
   Job job_ = Job::kNone;
   size_t job_step_ = 0;
   bool job_verbose_ = false;

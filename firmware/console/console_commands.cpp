@@ -187,7 +187,7 @@ void Console::cmd_stats(size_t argc, char**) {
 }
 
 bool Console::step_stats(size_t step) {
-  const AppStats& s = app_.stats();
+  const AppStats& s = snap_.app;
   switch (step) {
     case 0: {
       const LoopStats& l = s.loop;
@@ -210,15 +210,15 @@ bool Console::step_stats(size_t step) {
       break;
     }
     case 4: {
-      const hal::CanCounters& c = app_.board().can.counters();
+      const hal::CanCounters& c = snap_.can;
       begin("stats can");
       add(" state=%s tx_ok=%lu tx_dropped=%lu bus_off=%lu rx_ok=%lu rx_overflow=%lu error_frames=%lu",
-          can_state_name(app_.board().can.state()), ul(c.tx_ok), ul(c.tx_dropped), ul(c.bus_off), ul(c.rx_ok),
+          can_state_name(snap_.can_state), ul(c.tx_ok), ul(c.tx_dropped), ul(c.bus_off), ul(c.rx_ok),
           ul(c.rx_overflow), ul(c.error_frames));
       break;
     }
     case 5: {
-      const NavDiagnostics& dg = app_.navigator().diagnostics();
+      const NavDiagnostics& dg = snap_.nav;
       begin("stats nav");
       add(" imu_samples=%lu ranges_received=%lu ranges_used=%lu ranges_rejected=%lu resets=%lu reinits=%lu",
           ul(dg.imu_samples), ul(dg.ranges_received), ul(dg.ranges_used), ul(dg.ranges_rejected), ul(dg.resets),
@@ -250,16 +250,15 @@ void Console::cmd_anchors(size_t argc, char**) {
 }
 
 bool Console::step_anchors(size_t step) {
-  const Navigator& nav = app_.navigator();
-  const size_t n = nav.num_anchors();
+  const size_t n = snap_.num_anchors;
   if (step == 0) {
     begin("anchors");
     add(" count=%lu", static_cast<unsigned long>(n));
     reply_end();
     return n > 0;
   }
-  const AnchorStatus& a = nav.anchor_status(step - 1);
-  const uint64_t now = app_.last_tick_us();
+  const AnchorStatus& a = snap_.anchors[step - 1];
+  const uint64_t now = snap_.t_us;
   begin("anchors");
   add(" id=%u state=%s range_m=%.3f innov_m=%.3f p_nlos=%.3f los=%lu nlos=%lu used=%lu",
       static_cast<unsigned>(a.anchor_id), a.nlos_state ? "nlos" : "los", d(a.last_range_m),
@@ -295,11 +294,9 @@ void Console::cmd_ekf(size_t argc, char** argv) {
 }
 
 bool Console::step_ekf(size_t step) {
-  const Navigator& nav = app_.navigator();
   constexpr size_t kStates = Navigator::kErrorStateSize;
   if (step == 0) {
-    float x[16];
-    nav.state_vector(x);
+    const float* x = snap_.state;
     begin("ekf state");
     add(" p_m=%.3f,%.3f,%.3f v_mps=%.3f,%.3f,%.3f q=%.5f,%.5f,%.5f,%.5f ba_mps2=%.4f,%.4f,%.4f"
         " bg_radps=%.5f,%.5f,%.5f",
@@ -310,7 +307,7 @@ bool Console::step_ekf(size_t step) {
   }
   if (step == 1) {
     float p[kStates];
-    nav.covariance_diagonal(p);
+    for (size_t i = 0; i < kStates; ++i) p[i] = snap_.cov[i][i];
     begin("ekf pdiag");
     add(" p_m2=%.3g,%.3g,%.3g v_m2ps2=%.3g,%.3g,%.3g att_rad2=%.3g,%.3g,%.3g ba_m2ps4=%.3g,%.3g,%.3g"
         " bg_rad2ps2=%.3g,%.3g,%.3g",
@@ -322,7 +319,7 @@ bool Console::step_ekf(size_t step) {
   const size_t row = step - 2;
   begin("ekf cov");
   add(" row=%lu v=", static_cast<unsigned long>(row));
-  for (size_t c = 0; c < kStates; ++c) add(c == 0 ? "%.3g" : ",%.3g", d(nav.covariance(row, c)));
+  for (size_t c = 0; c < kStates; ++c) add(c == 0 ? "%.3g" : ",%.3g", d(snap_.cov[row][c]));
   reply_end();
   return row + 1 < kStates;
 }

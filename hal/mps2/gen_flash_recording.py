@@ -137,7 +137,11 @@ def hexf(v):
     """Exact C++ float literal of a float32 value held in a Python float."""
     if math.isnan(v):
         return "kNaNf"
-    return v.hex() + "F"
+    sign, digits = ("-", v.hex()[1:]) if v.hex().startswith("-") else ("", v.hex())
+    lead, rest = digits[2:].split(".")
+    frac, exp = rest.split("p")
+    frac = frac.rstrip("0")
+    return f"{sign}0x{lead}{'.' + frac if frac else ''}p{exp}F"
 
 
 def load(rec_dir):

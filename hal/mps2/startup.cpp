@@ -1,7 +1,8 @@
 // Cortex-M reset and exception entry for the MPS2-AN386 image: vector table,
-// FPU enable, .data/.bss initialisation, stack painting (for the measured
+// FPU enable, .data/.bss/TLS initialisation, stack painting (for the measured
 // high-water mark), static constructors, main(); faults report over
 // semihosting and end the run with exit code 3.
+#include <cstddef>
 #include <cstdint>
 
 #include "hal/mps2/board.hpp"
@@ -12,24 +13,42 @@ extern "C" {
 extern uint32_t __data_start[];
 extern uint32_t __data_end[];
 extern const uint32_t __data_source[];
+extern uint32_t __tdata_start[];
+extern uint32_t __tdata_end[];
+extern const uint32_t __tdata_source[];
+extern uint32_t __tbss_start[];
+extern uint32_t __tbss_end[];
 extern uint32_t __bss_start[];
 extern uint32_t __bss_end[];
 extern uint32_t __stack_bottom[];
 extern uint32_t __stack_top[];
+extern uint32_t __tls_base[];
 using InitFn = void (*)();
 extern const InitFn __init_array_start[];
 extern const InitFn __init_array_end[];
 
+void _set_tls(void* tls);  // picolibc: thread pointer for __aeabi_read_tp
 int main();
 [[noreturn]] void Reset_Handler();
 [[noreturn]] void Fault_Handler();
 [[noreturn]] void Unexpected_Handler();
 
 // Static objects are never destroyed (the firmware never returns from main):
-// destructor registration is accepted and dropped, so no atexit list exists.
+// destructor registration (Arm EABI __aeabi_atexit) is accepted and dropped,
+// so no atexit list exists.
 void* __dso_handle = nullptr;
-int __cxa_atexit(void (*)(void*), void*, void*) { return 0; }
+int __aeabi_atexit(void*, void (*)(void*), void*) { return 0; }
 }
+
+// Virtual destructors make every vtable reference the deleting destructor and
+// with it operator delete, although nothing is ever allocated. These
+// definitions satisfy the reference without libstdc++'s heap-backed ones; a
+// call would be a bug and ends the run (exit code 4).
+void operator delete(void*) noexcept {
+  uwbnav::mps2::semihost_write0("mps2: operator delete called (no heap in the image)\n");
+  uwbnav::mps2::semihost_exit(4);
+}
+void operator delete(void* p, std::size_t) noexcept { operator delete(p); }
 
 namespace {
 
@@ -71,7 +90,11 @@ extern "C" void Reset_Handler() {
 
   const uint32_t* src = __data_source;
   for (uint32_t* dst = __data_start; dst < __data_end;) *dst++ = *src++;
+  src = __tdata_source;
+  for (uint32_t* dst = __tdata_start; dst < __tdata_end;) *dst++ = *src++;
+  for (uint32_t* dst = __tbss_start; dst < __tbss_end;) *dst++ = 0U;
   for (uint32_t* dst = __bss_start; dst < __bss_end;) *dst++ = 0U;
+  _set_tls(__tls_base);
 
   // Paint the unused stack below the current frame (64-byte margin).
   uint32_t* sp = nullptr;

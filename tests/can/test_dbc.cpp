@@ -18,7 +18,7 @@ namespace {
 
 std::string num(double v) {
   char buf[40];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::fixed);  // DBC tools expect no exponents
   return std::string(buf, r.ptr);
 }
 

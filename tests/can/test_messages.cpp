@@ -22,7 +22,8 @@ TEST(CanBits, IntelOrderPutsLsbFirstAcrossByteBoundaries) {
   EXPECT_EQ(get_bits(d, 12, 12), 0xABCU);
   put_bits(d, 16, 48, 0x0000123456789ABCULL);
   EXPECT_EQ(d[2], 0xBC);
-  EXPECT_EQ(d[7], 0x00);
+  EXPECT_EQ(d[6], 0x34);
+  EXPECT_EQ(d[7], 0x12);
   EXPECT_EQ(get_bits(d, 16, 48), 0x123456789ABCULL);
 }
 
@@ -156,7 +157,7 @@ TEST(CanMessages, HeadingIsWrappedIntoPlusMinusPiWithoutSaturation) {
   VelHdgMsg d;
   ASSERT_EQ(decode(f, d), Status::kOk);
   EXPECT_NEAR(d.heading_rad, 3.5F - 2.0F * 3.14159265F, 1e-4F);
-  EXPECT_NEAR(wrap_pi(-7.0), -7.0 + 4.0 * 3.14159265358979, 1e-12);
+  EXPECT_NEAR(wrap_pi(-7.0), -7.0 + 2.0 * 3.14159265358979, 1e-12);
 }
 
 TEST(CanMessages, DecodeRejectsWrongIdLengthCrcAndCounterFifteen) {

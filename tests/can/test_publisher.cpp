@@ -131,7 +131,9 @@ TEST(CanPublisher, FramesDecodeToTheNavOutputAndShareTheGroupCounter) {
         EXPECT_EQ(m.resets, 2U);
       }
       auto it = last_counter.find(f.id);
-      if (it != last_counter.end()) EXPECT_EQ(meta.counter, (it->second + 1) % 15) << "id " << f.id;
+      if (it != last_counter.end()) {
+        EXPECT_EQ(meta.counter, (it->second + 1) % 15) << "id " << f.id;
+      }
       last_counter[f.id] = meta.counter;
     }
   }

@@ -21,14 +21,15 @@
 
 namespace uwbnav::testing {
 
-// Serial port backed by strings. `write_cap` bytes are accepted per write()
-// call (a slow reader); read() hands out what was typed.
+// Serial port backed by strings. At most `write_cap` bytes are accepted per
+// cycle (a slow reader); read() hands out what was typed.
 class MemSerialPort final : public hal::SerialPort {
  public:
   std::string input;
   size_t in_pos = 0;
   std::string output;
-  size_t write_cap = SIZE_MAX;
+  size_t write_cap = SIZE_MAX;  // bytes the reader takes per cycle (ConsoleRig::tick refills)
+  size_t write_room = SIZE_MAX;
   uint64_t total_read = 0;
   uint64_t total_written = 0;
 
@@ -43,7 +44,8 @@ class MemSerialPort final : public hal::SerialPort {
     return n;
   }
   size_t write(const uint8_t* buf, size_t len) override {
-    const size_t n = std::min(len, write_cap);
+    const size_t n = std::min(len, write_room);
+    write_room -= n;
     output.append(reinterpret_cast<const char*>(buf), n);
     total_written += n;
     return n;
@@ -71,6 +73,19 @@ inline uint64_t first_cycle_us(const dataset::Recording& rec) {
   return (t0 / kCyclePeriodUs + 1) * kCyclePeriodUs;
 }
 
+// The first `seconds` of a recording: after that the sensors fall silent and
+// the firmware's counters and filter hold still (stable values to compare with).
+inline dataset::Recording truncated(const dataset::Recording& full, double seconds) {
+  dataset::Recording rec = full;
+  const uint64_t t_end = first_cycle_us(rec) + static_cast<uint64_t>(seconds * 1e6);
+  rec.imu.erase(std::remove_if(rec.imu.begin(), rec.imu.end(), [&](const ImuSample& s) { return s.t_us > t_end; }),
+                rec.imu.end());
+  rec.uwb.erase(std::remove_if(rec.uwb.begin(), rec.uwb.end(),
+                               [&](const dataset::UwbRow& r) { return r.range.t_us > t_end; }),
+                rec.uwb.end());
+  return rec;
+}
+
 // An App on a replay board whose serial port is a MemSerialPort.
 class ConsoleRig {
  public:
@@ -85,6 +100,7 @@ class ConsoleRig {
   }
 
   void tick() {
+    serial.write_room = serial.write_cap;
     clock_.sleep_until_us(t_us);
     app.tick(t_us);
     hal::CanFrame f;

@@ -95,7 +95,8 @@ TEST(ConsoleCommands, StatusReportsTheLastOutputAndSensorAges) {
 }
 
 TEST(ConsoleCommands, StatsShowsLoopSourcesRejectsCanNavAndConsoleCounters) {
-  ConsoleRig rig(sim_recording());
+  const dataset::Recording rec = testing::truncated(sim_recording(), 4.0);
+  ConsoleRig rig(rec);
   rig.app.record_cycle_timing(120, 5, false);
   rig.app.record_cycle_timing(480, 9, true);
   rig.run_s(5.0);
@@ -134,9 +135,9 @@ TEST(ConsoleCommands, StatsShowsCanBusOffFromTheBoard) {
 }
 
 TEST(ConsoleCommands, AnchorsListsEverySiteAnchorWithItsCounters) {
-  const dataset::Recording& rec = sim_recording();
+  const dataset::Recording rec = testing::truncated(sim_recording(), 20.0);
   ConsoleRig rig(rec);
-  rig.run_s(20.0);
+  rig.run_s(20.5);
   const auto lines = reply_lines(rig.command("anchors"));
   ASSERT_EQ(lines.size(), rec.site.num_anchors + 1);
   EXPECT_EQ(kv(lines[0], "count"), std::to_string(rec.site.num_anchors));
@@ -148,19 +149,13 @@ TEST(ConsoleCommands, AnchorsListsEverySiteAnchorWithItsCounters) {
     EXPECT_EQ(kv(l, "los"), std::to_string(a.los_count));
     EXPECT_EQ(kv(l, "nlos"), std::to_string(a.nlos_count));
     EXPECT_GT(kv_num(l, "range_m"), 0.0);
-    EXPECT_LE(kv_num(l, "age_ms"), 2000.0);
+    EXPECT_LE(kv_num(l, "age_ms"), 2500.0);
   }
 }
 
 TEST(ConsoleCommands, EkfPrintsStateAndDiagonalAndVerboseStreamsTheFullCovarianceOverSeveralCycles) {
-  // Sensors stop after 10 s, so the covariance holds still while the reply is paced out.
-  dataset::Recording rec = sim_recording();
-  const uint64_t t_end = testing::first_cycle_us(rec) + 10000000U;
-  rec.imu.erase(std::remove_if(rec.imu.begin(), rec.imu.end(), [&](const ImuSample& s) { return s.t_us > t_end; }),
-                rec.imu.end());
-  rec.uwb.erase(std::remove_if(rec.uwb.begin(), rec.uwb.end(),
-                               [&](const dataset::UwbRow& r) { return r.range.t_us > t_end; }),
-                rec.uwb.end());
+  // Sensors stop after 10 s, so the covariance holds still while the test compares.
+  const dataset::Recording rec = testing::truncated(sim_recording(), 10.0);
   ConsoleRig rig(rec);
   rig.run_s(11.0);
   const auto brief = reply_lines(rig.command("ekf"));
@@ -210,7 +205,7 @@ TEST(ConsoleCommands, ParamGetAndSetApplyLiveAndReplyWithOldAndNewValue) {
   EXPECT_EQ(kv(lines[0], "value"), "5");
   EXPECT_NE(lines[0].find("doc=\""), std::string::npos);
 
-  lines = reply_lines(rig.command("param set gate.innov_sigma 7.5"));
+  lines = lines_with_prefix(reply_lines(rig.command("param set gate.innov_sigma 7.5")), "param ");
   ASSERT_EQ(lines.size(), 1U);
   EXPECT_EQ(lines[0], "param name=gate.innov_sigma value=7.5 old=5");
   EXPECT_EQ(rig.app.params().get(ParamId::kGateInnovSigma), 7.5F);

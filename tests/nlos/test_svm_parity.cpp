@@ -118,16 +118,15 @@ TEST(SvmParity, EmbeddedProbabilityMatchesLibsvmPredictProbabilityTo1e5) {
   svm_free_and_destroy_model(&tp.libsvm);
 }
 
-TEST(SvmParity, CouplingIterationNotPlainSigmoidNearHalf) {
-  // libsvm 3.24 couples the two pairwise probabilities iteratively: near p = 0.5 it stops
-  // at (0.5, 0.5) while the plain sigmoid would not. The evaluator must do the same.
+TEST(SvmParity, TwoClassProbabilityIsClippedSigmoidWithoutCoupling) {
+  // libsvm 3.24 returns the Platt sigmoid for two classes; the multi-class coupling
+  // iteration would stop at exactly 0.5 here (its tolerance is 0.0025).
   SvmModel m;
   m.prob_a = -1.0;
   m.prob_b = 0.0;
-  const double p = svm_label0_probability(m, 0.01);  // sigmoid = 0.5025
-  EXPECT_DOUBLE_EQ(p, 0.5);
-  const double far = svm_label0_probability(m, 3.0);  // sigmoid = 0.9526
-  EXPECT_NEAR(far, 1.0 / (1.0 + std::exp(-3.0)), 2e-3);
+  EXPECT_DOUBLE_EQ(svm_label0_probability(m, 0.01), 1.0 / (1.0 + std::exp(-0.01)));
+  EXPECT_DOUBLE_EQ(svm_label0_probability(m, 40.0), 1.0 - 1e-7);
+  EXPECT_DOUBLE_EQ(svm_label0_probability(m, -40.0), 1e-7);
 }
 
 TEST(SvmModelChecksum, CorruptedCoefficientIsDetected) {

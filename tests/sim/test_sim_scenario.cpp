@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "tools/sim/rng.hpp"
 #include "tools/sim/simulator.hpp"
 
 namespace uwbnav::sim {
@@ -178,6 +179,35 @@ TEST(SimScenario, BadScenarioTextIsRejectedWithAOneLineErrorNamingTheLine) {
     EXPECT_NE(err.find(c.expect_in_error), std::string::npos) << "text: " << text << "\nerror: " << err;
     EXPECT_EQ(err.find('\n'), std::string::npos) << err;
   }
+}
+
+TEST(SimScenario, MutatedPresetTextNeverCrashesTheParser) {
+  // Deterministic mutations (own PRNG) of the default preset: replace, delete or
+  // duplicate characters; the parser must answer kOk or a one-line error.
+  const std::string base = preset_text("parking_nlos");
+  Rng rng(2024);
+  const std::string alphabet = "0123456789.-=[]# \nabcdefghijklmnopqrstuvwxyz_eE+";
+  size_t rejected = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    std::string text = base;
+    const int edits = 1 + static_cast<int>(rng.below(6));
+    for (int e = 0; e < edits && !text.empty(); ++e) {
+      const size_t pos = static_cast<size_t>(rng.below(text.size()));
+      switch (rng.below(3)) {
+        case 0: text[pos] = alphabet[static_cast<size_t>(rng.below(alphabet.size()))]; break;
+        case 1: text.erase(pos, 1 + static_cast<size_t>(rng.below(20))); break;
+        default: text.insert(pos, text.substr(pos, static_cast<size_t>(rng.below(30)))); break;
+      }
+    }
+    Scenario sc;
+    std::string err;
+    if (!ok(parse_scenario(text, "mutated", sc, &err))) {
+      ++rejected;
+      EXPECT_FALSE(err.empty());
+      EXPECT_EQ(err.find('\n'), std::string::npos) << err;
+    }
+  }
+  EXPECT_GT(rejected, 50U);
 }
 
 TEST(SimScenario, MissingFileIsNotFoundNotACrash) {

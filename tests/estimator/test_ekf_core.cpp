@@ -1,0 +1,132 @@
+// EKF core: block-sparse covariance propagation equals the dense Phi P Phi^T + Q,
+// mechanisation at rest stays put, updates shrink variance and refuse
+// non-finite input, sanitise detects explosions and clamps variances.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "estimator/ekf_core.hpp"
+
+namespace uwbnav {
+namespace {
+
+constexpr double kTolRel = sizeof(Real) == sizeof(float) ? 1e-4 : 1e-10;
+
+ErrCov random_spd(unsigned seed) {
+  std::srand(seed);
+  ErrCov a = ErrCov::Random();
+  ErrCov p = a * a.transpose() * Real(0.1) + ErrCov::Identity() * Real(0.01);
+  return p;
+}
+
+TEST(EkfCore, SparsePropagationEqualsDenseTransition) {
+  EkfCore ekf;
+  NominalState x;
+  x.q_nav_body = quat_normalised(Quat(Real(0.95), Real(0.1), Real(-0.05), Real(0.3)));
+  x.ba_body_mps2 = Vec3(Real(0.1), Real(-0.05), Real(0.02));
+  ekf.init(x, ErrVec::Ones());
+  ekf.mutable_cov() = random_spd(3);
+  const ErrCov p0 = ekf.cov();
+  const Vec3 f(Real(1.2), Real(-0.4), Real(9.9));
+  const Vec3 w(Real(0.1), Real(0.05), Real(-0.3));
+  const Real dt = Real(0.01);
+  ImuNoise noise;
+  // Dense reference built from the same mid-interval quantities.
+  const Quat q_mid = quat_mul(x.q_nav_body, quat_exp((w - x.bg_body_radps) * (Real(0.5) * dt)));
+  const Mat3 c = quat_to_dcm(q_mid);
+  const Vec3 f_nav = c * (f - x.ba_body_mps2);
+  ErrCov a = ErrCov::Zero();
+  a.block<3, 3>(ErrIdx::kPos, ErrIdx::kVel) = Mat3::Identity();
+  a.block<3, 3>(ErrIdx::kVel, ErrIdx::kAtt) = -skew(f_nav);
+  a.block<3, 3>(ErrIdx::kVel, ErrIdx::kBa) = -c;
+  a.block<3, 3>(ErrIdx::kAtt, ErrIdx::kBg) = -c;
+  const ErrCov ad = a * dt;
+  const ErrCov phi = ErrCov::Identity() + ad + ad * ad / Real(2) + ad * ad * ad / Real(6);
+  ErrCov q = ErrCov::Zero();
+  const Real qa = noise.accel_noise * noise.accel_noise;
+  for (int i = 0; i < 3; ++i) {
+    q(i, i) = qa * dt * dt * dt / Real(3);
+    q(i, 3 + i) = q(3 + i, i) = qa * dt * dt / Real(2);
+    q(3 + i, 3 + i) = qa * dt;
+    q(6 + i, 6 + i) = noise.gyro_noise * noise.gyro_noise * dt;
+    q(9 + i, 9 + i) = noise.accel_bias_rw * noise.accel_bias_rw * dt;
+    q(12 + i, 12 + i) = noise.gyro_bias_rw * noise.gyro_bias_rw * dt;
+  }
+  const ErrCov expected = phi * p0 * phi.transpose() + q;
+  ekf.predict_imu(f, w, dt, Real(9.80665), noise);
+  const double scale = static_cast<double>(expected.cwiseAbs().maxCoeff());
+  EXPECT_LT(static_cast<double>((ekf.cov() - expected).cwiseAbs().maxCoeff()), kTolRel * scale * 10);
+}
+
+TEST(EkfCore, LevelVehicleAtRestStaysPut) {
+  EkfCore ekf;
+  NominalState x;
+  x.pos_nav_m = Vec3(Real(5), Real(6), Real(0));
+  x.q_nav_body = quat_from_yaw(Real(0.7));
+  ekf.init(x, ErrVec::Constant(Real(0.1)));
+  for (int k = 0; k < 1000; ++k) {
+    ekf.predict_imu(Vec3(Real(0), Real(0), Real(9.80665)), Vec3::Zero(), Real(0.01), Real(9.80665), ImuNoise{});
+  }
+  EXPECT_LT(static_cast<double>((ekf.state().pos_nav_m - x.pos_nav_m).norm()), 1e-3);
+  EXPECT_LT(static_cast<double>(ekf.state().vel_nav_mps.norm()), 1e-4);
+  EXPECT_NEAR(static_cast<double>(quat_yaw(ekf.state().q_nav_body)), 0.7, 1e-5);
+  // Covariance grows (coasting) and stays symmetric.
+  EXPECT_GT(ekf.cov()(0, 0), Real(0.01));
+  EXPECT_LT(static_cast<double>((ekf.cov() - ekf.cov().transpose()).cwiseAbs().maxCoeff()), 1e-9);
+}
+
+TEST(EkfCore, ConstantRateRotationIntegratesExactly) {
+  EkfCore ekf;
+  ekf.init(NominalState{}, ErrVec::Constant(Real(0.1)));
+  const Real rate = Real(0.5);  // rad/s about z
+  for (int k = 0; k < 200; ++k) {
+    ekf.predict_imu(Vec3(Real(0), Real(0), Real(9.80665)), Vec3(Real(0), Real(0), rate), Real(0.01), Real(9.80665),
+                    ImuNoise{});
+  }
+  EXPECT_NEAR(static_cast<double>(quat_yaw(ekf.state().q_nav_body)), 1.0, 1e-4);
+}
+
+TEST(EkfCore, ScalarUpdateShrinksVarianceAndCorrectsState) {
+  EkfCore ekf;
+  ekf.init(NominalState{}, ErrVec::Ones());
+  ScalarObs obs;
+  obs.h(ErrIdx::kPos) = Real(1);
+  obs.innovation = Real(0.5);
+  obs.r_var = Real(1);
+  const UpdateResult r = ekf.update(obs);
+  EXPECT_TRUE(r.applied);
+  EXPECT_NEAR(static_cast<double>(r.innovation_var), 2.0, 1e-6);
+  EXPECT_NEAR(static_cast<double>(ekf.cov()(0, 0)), 0.5, 1e-6);
+  EXPECT_NEAR(static_cast<double>(ekf.state().pos_nav_m.x()), 0.25, 1e-6);
+}
+
+TEST(EkfCore, NonFiniteObservationIsRefused) {
+  EkfCore ekf;
+  ekf.init(NominalState{}, ErrVec::Ones());
+  ScalarObs obs;
+  obs.h(0) = Real(1);
+  obs.innovation = std::numeric_limits<Real>::quiet_NaN();
+  EXPECT_FALSE(ekf.update(obs).applied);
+  obs.innovation = Real(1);
+  obs.r_var = -Real(5);  // S would be negative
+  EXPECT_FALSE(ekf.update(obs).applied);
+  EXPECT_TRUE(ekf.cov().allFinite());
+  EXPECT_TRUE(ekf.sanitise());
+}
+
+TEST(EkfCore, SanitiseDetectsExplosionAndClampsVariances) {
+  EkfCore ekf;
+  ekf.init(NominalState{}, ErrVec::Ones());
+  ekf.mutable_cov()(0, 0) = Real(1e9);
+  ekf.mutable_cov()(6, 6) = Real(0);
+  EXPECT_TRUE(ekf.sanitise());
+  EXPECT_LE(ekf.cov()(0, 0), Real(1e6) * Real(1.0001));
+  EXPECT_GT(ekf.cov()(6, 6), Real(0));
+  ekf.mutable_state().vel_nav_mps.x() = Real(1e5);
+  EXPECT_FALSE(ekf.sanitise());
+  ekf.mutable_state().vel_nav_mps.x() = std::numeric_limits<Real>::infinity();
+  EXPECT_FALSE(ekf.sanitise());
+}
+
+}  // namespace
+}  // namespace uwbnav

@@ -1,0 +1,140 @@
+// Analytic Jacobians of every measurement model (range with lever arm and time
+// offset, NHC, ZUPT/ZARU, height) against central differences of the nominal
+// model under error injection; singular range geometry stays finite.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+
+#include "estimator/mm_height.hpp"
+#include "estimator/mm_nhc.hpp"
+#include "estimator/mm_range.hpp"
+#include "estimator/mm_zupt.hpp"
+
+namespace uwbnav {
+namespace {
+
+// The error-state injection used by EkfCore (ekf_state.hpp conventions).
+NominalState inject(const NominalState& x, const ErrVec& dx) {
+  NominalState y = x;
+  y.pos_nav_m += dx.segment<3>(ErrIdx::kPos);
+  y.vel_nav_mps += dx.segment<3>(ErrIdx::kVel);
+  y.q_nav_body = quat_normalised(quat_mul(quat_exp(dx.segment<3>(ErrIdx::kAtt)), x.q_nav_body));
+  y.ba_body_mps2 += dx.segment<3>(ErrIdx::kBa);
+  y.bg_body_radps += dx.segment<3>(ErrIdx::kBg);
+  return y;
+}
+
+// Central-difference Jacobian of h(x) w.r.t. the error state.
+ErrRow numeric_jacobian(const NominalState& x, const std::function<double(const NominalState&)>& h) {
+  ErrRow j;
+  const Real eps = sizeof(Real) == sizeof(float) ? Real(1e-3) : Real(1e-6);
+  for (int i = 0; i < kN; ++i) {
+    ErrVec dx = ErrVec::Zero();
+    dx(i) = eps;
+    const double hp = h(inject(x, dx));
+    dx(i) = -eps;
+    const double hm = h(inject(x, dx));
+    j(i) = static_cast<Real>((hp - hm) / (2.0 * static_cast<double>(eps)));
+  }
+  return j;
+}
+
+NominalState sample_state() {
+  NominalState x;
+  x.pos_nav_m = Vec3(Real(12.5), Real(-3.25), Real(0.4));
+  x.vel_nav_mps = Vec3(Real(3.1), Real(-1.2), Real(0.15));
+  x.q_nav_body = quat_normalised(Quat(Real(0.9), Real(0.05), Real(-0.08), Real(0.42)));
+  x.ba_body_mps2 = Vec3(Real(0.05), Real(-0.1), Real(0.02));
+  x.bg_body_radps = Vec3(Real(0.004), Real(-0.003), Real(0.006));
+  return x;
+}
+
+void expect_row_near(const ErrRow& analytic, const ErrRow& numeric, double tol) {
+  for (int i = 0; i < kN; ++i) {
+    EXPECT_NEAR(static_cast<double>(analytic(i)), static_cast<double>(numeric(i)), tol) << "column " << i;
+  }
+}
+
+const double kTol = sizeof(Real) == sizeof(float) ? 2e-3 : 1e-6;
+
+TEST(MmRange, JacobianWithLeverArmAndTimeOffsetMatchesNumeric) {
+  const NominalState x = sample_state();
+  const Vec3 gyro(Real(0.3), Real(-0.2), Real(0.8));
+  const Vec3 lever(Real(0.5), Real(-0.3), Real(1.7));
+  const Vec3 anchor(Real(0), Real(0), Real(1.5));
+  const Real dt = Real(0.007);
+  const RangePrediction p = mm_range_predict(x, quat_to_dcm(x.q_nav_body), gyro, lever, anchor, dt);
+  ASSERT_TRUE(p.valid);
+  const ErrRow num = numeric_jacobian(x, [&](const NominalState& y) {
+    return static_cast<double>(mm_range_predict(y, quat_to_dcm(y.q_nav_body), gyro, lever, anchor, dt).range_m);
+  });
+  expect_row_near(p.h, num, kTol);
+  // The velocity column carries the time offset; attitude columns the lever arm.
+  EXPECT_GT(p.h.segment<3>(ErrIdx::kVel).norm(), Real(0));
+  EXPECT_GT(p.h.segment<3>(ErrIdx::kAtt).norm(), Real(0.1));
+}
+
+TEST(MmRange, PredictsTagAtTheRangeTimeNotTheStateTime) {
+  NominalState x;
+  x.vel_nav_mps = Vec3(Real(10), Real(0), Real(0));
+  const Vec3 anchor(Real(100), Real(0), Real(0));
+  const RangePrediction now = mm_range_predict(x, Mat3::Identity(), Vec3::Zero(), Vec3::Zero(), anchor, Real(0));
+  const RangePrediction later =
+      mm_range_predict(x, Mat3::Identity(), Vec3::Zero(), Vec3::Zero(), anchor, Real(0.008));
+  EXPECT_NEAR(static_cast<double>(now.range_m - later.range_m), 0.08, 1e-4);  // 10 m/s * 8 ms closer
+}
+
+TEST(MmRange, TagOnTheAnchorIsInvalidAndFinite) {
+  NominalState x;
+  x.pos_nav_m = Vec3(Real(1), Real(2), Real(0));
+  const Vec3 lever(Real(0), Real(0), Real(1.5));
+  const RangePrediction p =
+      mm_range_predict(x, Mat3::Identity(), Vec3::Zero(), lever, Vec3(Real(1), Real(2), Real(1.5)), Real(0));
+  EXPECT_FALSE(p.valid);
+  EXPECT_TRUE(p.h.allFinite());
+  EXPECT_TRUE(std::isfinite(p.range_m));
+}
+
+TEST(MmNhc, LateralAndVerticalJacobiansMatchNumeric) {
+  const NominalState x = sample_state();
+  for (int axis = 1; axis <= 2; ++axis) {
+    const ScalarObs obs = mm_nhc(x, quat_to_dcm(x.q_nav_body), axis, Real(0.1));
+    const ErrRow num = numeric_jacobian(x, [&](const NominalState& y) {
+      return static_cast<double>(mm_nhc_predict(y, quat_to_dcm(y.q_nav_body), axis));
+    });
+    expect_row_near(obs.h, num, kTol);
+    EXPECT_NEAR(static_cast<double>(obs.innovation),
+                -static_cast<double>(mm_nhc_predict(x, quat_to_dcm(x.q_nav_body), axis)), 1e-6);
+  }
+}
+
+TEST(MmZupt, VelocityAndGyroBiasJacobiansMatchNumeric) {
+  const NominalState x = sample_state();
+  const Vec3 gyro_mean(Real(0.01), Real(0.02), Real(-0.01));
+  for (int axis = 0; axis < 3; ++axis) {
+    const ScalarObs z = mm_zupt(x, axis, Real(0.02));
+    expect_row_near(z.h, numeric_jacobian(x, [&](const NominalState& y) {
+                      return static_cast<double>(y.vel_nav_mps(axis));
+                    }),
+                    kTol);
+    const ScalarObs w = mm_zaru(x, gyro_mean, axis, Real(0.002));
+    expect_row_near(w.h, numeric_jacobian(x, [&](const NominalState& y) {
+                      return static_cast<double>(y.bg_body_radps(axis));
+                    }),
+                    kTol);
+    EXPECT_NEAR(static_cast<double>(w.innovation), static_cast<double>(gyro_mean(axis) - x.bg_body_radps(axis)),
+                1e-6);
+  }
+}
+
+TEST(MmHeight, JacobianMatchesNumeric) {
+  const NominalState x = sample_state();
+  const ScalarObs obs = mm_height(x, Real(0.1), Real(0.1));
+  expect_row_near(obs.h, numeric_jacobian(x, [](const NominalState& y) { return static_cast<double>(y.pos_nav_m.z()); }),
+                  kTol);
+  EXPECT_NEAR(static_cast<double>(obs.innovation), 0.1 - 0.4, 1e-6);
+}
+
+}  // namespace
+}  // namespace uwbnav
