@@ -23,6 +23,9 @@ int64_t diff_us(uint64_t a, uint64_t b) { return static_cast<int64_t>(a) - stati
 constexpr uint64_t kMinImuDtUs = 100;
 // ZUPT only when the filter speed is also below this [m/s].
 constexpr Real kZuptMaxSpeed_mps = Real(0.3);
+// Innovations beyond this many sigmas and this many metres are never fused.
+constexpr Real kHardGateSigma = Real(10);
+constexpr Real kHardGateMin_m = Real(2);
 // ... and the horizontal specific force below this (a steady brake is not rest) [m/s^2].
 constexpr Real kRestMaxHorizAccel_mps2 = Real(0.1);
 
@@ -168,7 +171,7 @@ Status Navigator::on_imu(const ImuSample& imu) {
 void Navigator::apply_constraints(uint64_t t_us) {
   if (t_us - last_constraint_us_ < cfg_.constraint_period_us) return;
   last_constraint_us_ = t_us;
-  if (height_on_) (void)fuse(mm_height(ekf_.state(), height_ref_m_, cfg_.height_sigma));
+  if (height_on_) (void)fuse(mm_height(ekf_.state(), height_ref_m_, height_sigma_m_));
   if (!cfg_.ground_constraints || cv_mode_) return;
   rest_.evaluate();
   // The IMU's spread alone cannot tell rest from constant velocity or a steady
@@ -302,7 +305,12 @@ RangeReport Navigator::on_range(const UwbRange& range) {
 
   const GatingDecision d = gating_.assess(ctx);
   bool used = false;
-  if (running && pred.valid && d.use) {
+  // Hard guard behind the gating layer: a range this far off is a gross error
+  // whatever the policy says (a drifted filter is re-initialised by the
+  // divergence monitor instead of being dragged by blunders).
+  const Real innov_abs = running && pred.valid ? std::fabs(static_cast<Real>(range.range_m) - pred.range_m) : Real(0);
+  const bool gross = innov_abs > kHardGateSigma * std::sqrt(s_nom) && innov_abs > kHardGateMin_m;
+  if (running && pred.valid && d.use && !gross) {
     ScalarObs obs;
     obs.h = pred.h;
     obs.innovation = static_cast<Real>(range.range_m) - pred.range_m;

@@ -160,6 +160,7 @@ class Navigator {
   bool planar_ = false;          // anchors near-planar: 2-D fix, height constraint (auto)
   bool height_on_ = false;
   Real height_ref_m_ = Real(0);  // body-origin height held by the constraint [m]
+  Real height_sigma_m_ = Real(0.1);  // its 1-sigma [m]
   uint64_t t_state_us_ = 0;      // time of the filter state [us]
   uint64_t running_since_us_ = 0;  // time the filter (re)started [us]
   uint64_t last_constraint_us_ = 0;

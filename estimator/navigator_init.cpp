@@ -16,6 +16,7 @@ constexpr uint64_t kTrackMaxSpanUs = 20000000;    // heading chord: longest time
 constexpr Real kMinChord_m = Real(0.5);            // heading: shortest chord of the LS track [m]
 constexpr Real kMaxChordSpreadRad = Real(0.35);    // heading: largest disagreement between chords [rad]
 constexpr Real kMinBaseline_m = Real(0.3);         // two-tag heading: shortest horizontal baseline [m]
+constexpr Real kWeakHeightFactor = Real(5);        // auto height mode, non-planar anchors: sigma multiplier
 constexpr uint64_t kTrackSpacingUs = 100000;      // track: shortest interval between stored fixes [us]
 constexpr uint64_t kTrackFreshUs = 1000000;       // rest check: LS track span looked at [us]
 constexpr Real kRestTrackDist_m = Real(0.1);       // rest check: allowed track motion beyond noise [m]
@@ -257,8 +258,10 @@ void Navigator::try_heading(uint64_t t_us) {
 }
 
 void Navigator::setup_height(Real origin_z_m) {
-  const bool on = cfg_.height_mode == 1 || (cfg_.height_mode == 2 && planar_);
-  height_on_ = cfg_.ground_constraints && on;
+  // Auto: firm on planar layouts (z unobservable), weak otherwise (z observable
+  // near the anchors but not far from them; ramps stay within the weak sigma).
+  height_on_ = cfg_.ground_constraints && cfg_.height_mode != 0;
+  height_sigma_m_ = (cfg_.height_mode == 1 || planar_) ? cfg_.height_sigma : kWeakHeightFactor * cfg_.height_sigma;
   // Planar layouts fixed the height from the survey; otherwise hold the initial fix.
   height_ref_m_ = planar_ ? cfg_.origin_height : origin_z_m;
 }

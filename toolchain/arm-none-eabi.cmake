@@ -12,7 +12,6 @@ find_program(CMAKE_AR arm-none-eabi-ar)
 find_program(CMAKE_RANLIB arm-none-eabi-ranlib)
 find_program(CMAKE_OBJCOPY arm-none-eabi-objcopy)
 find_program(CMAKE_SIZE arm-none-eabi-size)
-find_program(UWBNAV_ARM_NM arm-none-eabi-nm)
 
 # No OS to run a test executable: compiler checks build static libraries only.
 set(CMAKE_TRY_COMPILE_TARGET_TYPE STATIC_LIBRARY)

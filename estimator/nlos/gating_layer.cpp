@@ -80,12 +80,12 @@ void GatingLayer::update_params(const Params& params) {
   default_nlos_ = params[ParamId::kGateDefaultNlos];
   innov_z0_ = params[ParamId::kGateInnovZ0];
   verify_frac_ = params[ParamId::kGateVerifyFrac];
+  drift_frac_ = params[ParamId::kGateDriftFrac];
 }
 
 void GatingLayer::reset() {
   for (Slot& s : slots_) s = Slot{};
-  now_us_ = 0;
-  last_fused_t_us_ = 0;
+  last_los_t_us_ = 0;
   seen_ready_ = false;
   escape_active_ = false;
   los_share_ = 0.0F;
@@ -291,30 +291,32 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
     if (std::isfinite(factor)) d.r_scale = factor;
   }
   // Robust mode (the escape): a filter that has just become ready is unverified (its fix
-  // may be biased by NLOS ranges), and a filter that fused nothing for escape_s while
-  // ranges kept arriving may have drifted away from its own gate. In robust mode every
-  // finite range is fused with R inflated by the seed 003 factor of its residual (at least
-  // escape_r_scale): an iteratively reweighted update in which the consistent ranges
-  // dominate. It ends when the running share of ranges within resid_th sigma exceeds
-  // verify_frac (the filter agrees with the measurements again).
+  // may be biased by NLOS ranges), and a filter whose innovations stopped matching the
+  // measurements (running share of |innovation| < resid_th sigma_uwb below drift_frac), or
+  // that fused nothing for escape_s while ranges kept arriving, may have drifted away from
+  // its own gate. (Ranges held back by the hysteresis do not count as rejected: the
+  // filter agrees with them.) In robust mode every finite range is fused with R inflated by the seed
+  // 003 factor of its residual (at least escape_r_scale): an iteratively reweighted update
+  // in which the consistent ranges dominate. It ends when the share exceeds verify_frac.
+  // The share uses the nominal sigma_uwb, not S: a filter with a large covariance has not
+  // shown that it agrees with the ranges.
   if (ctx.filter_ready && escape_us_ > 0) {
-    if (!seen_ready_) {  // first converged prediction: start verified only by the data
-      seen_ready_ = true;
-      last_fused_t_us_ = ctx.range.t_us;
-      escape_active_ = true;
-      ++escape_entries_;
-      los_share_ = 0.0F;
-    }
-    if (!escape_active_ && ctx.range.t_us - last_fused_t_us_ > escape_us_) {
-      escape_active_ = true;
-      ++escape_entries_;
-      los_share_ = 0.0F;
-    }
-    if (std::isfinite(e.z)) {
+    if (std::isfinite(ctx.innovation_m)) {
       constexpr float kShareGain = 0.02F;  // EMA over about 50 ranges
-      los_share_ += kShareGain * ((e.z < resid_th_ ? 1.0F : 0.0F) - los_share_);
+      const bool agrees = std::fabs(ctx.innovation_m) < resid_th_ * sigma_uwb_m(ctx);
+      los_share_ += kShareGain * ((agrees ? 1.0F : 0.0F) - los_share_);
     }
-    if (escape_active_ && los_share_ > verify_frac_) escape_active_ = false;
+    const bool first_ready = !seen_ready_;
+    seen_ready_ = true;
+    if (first_ready || !d.nlos) last_los_t_us_ = ctx.range.t_us;
+    const bool starved = ctx.range.t_us - last_los_t_us_ > escape_us_;
+    if (!escape_active_ && (first_ready || starved || los_share_ < drift_frac_)) {
+      escape_active_ = true;
+      ++escape_entries_;
+      los_share_ = 0.0F;
+    } else if (escape_active_ && los_share_ > verify_frac_) {
+      escape_active_ = false;
+    }
     if (escape_active_ && std::isfinite(ctx.innovation_m)) {
       const float factor = residual_inflation_factor(e.z, resid_th_, resid_beta_);
       d.use = true;
@@ -335,7 +337,6 @@ GatingDecision GatingLayer::assess(const RangeContext& ctx) {
     return d;
   }
   Slot& slot = slots_[si];
-  now_us_ = ctx.range.t_us;
   const Evidence e = compute_evidence(ctx, slot);
 
   switch (policy_) {
@@ -375,7 +376,6 @@ void GatingLayer::on_result(const RangeContext& ctx, const GatingDecision& d, bo
   if (!fused) return;
   const int si = slot_index(ctx);
   if (si >= 0) ++slots_[si].stats.used_count;
-  last_fused_t_us_ = ctx.range.t_us;
 }
 
 }  // namespace uwbnav

@@ -46,7 +46,7 @@ class GatingLayer {
   // Verdict on one range, before the filter update. Never touches the filter.
   // Ranges must come in non-decreasing time (as the Navigator guarantees).
   GatingDecision assess(const RangeContext& ctx);
-  // Feedback after the update: `fused` says whether the Navigator fused it.
+  // Feedback after the update: `fused` says whether the Navigator fused it (counters).
   void on_result(const RangeContext& ctx, const GatingDecision& d, bool fused);
 
   GatingPolicy policy() const { return policy_; }
@@ -132,14 +132,14 @@ class GatingLayer {
   float default_nlos_ = 0.5F;
   float innov_z0_ = 3.0F;
   float verify_frac_ = 0.35F;
+  float drift_frac_ = 0.15F;
 
   // Escape state (default policy).
-  uint64_t now_us_ = 0;
-  uint64_t last_fused_t_us_ = 0;
+  uint64_t last_los_t_us_ = 0;     // last range classified LOS while the filter was ready
   bool seen_ready_ = false;         // the filter has been ready since the last reset
   bool escape_active_ = false;      // robust mode (warm-up or escape)
   uint32_t escape_entries_ = 0;
-  float los_share_ = 0.0F;          // EMA of (z < resid_th) over ranges with a prediction
+  float los_share_ = 0.0F;          // EMA of (|innovation| < resid_th sigma_uwb) while ready
 };
 
 }  // namespace uwbnav

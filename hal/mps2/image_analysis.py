@@ -47,6 +47,8 @@ DOUBLE_LIBM = {
     "expm1", "log", "log2", "log10", "log1p", "pow", "sqrt", "cbrt", "hypot", "erf", "erfc",
     "fmod", "remainder", "floor", "ceil", "round", "lround", "llround", "trunc", "lgamma", "tgamma",
 }
+RAM_BASE = 0x20000000
+NOT_ALLOCATED = (".debug", ".comment", ".ARM.attributes", ".stab")
 HOT_ROOT = "_ZN6uwbnav3App4tickEy"
 # The estimator's per-sample entry points (mangled-name prefixes; clones included).
 ESTIMATOR_ROOTS = ("_ZN6uwbnav9Navigator6on_imu", "_ZN6uwbnav9Navigator8on_range", "_ZN6uwbnav9Navigator6output")
@@ -60,38 +62,68 @@ def run(cmd):
     return subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
 
 
-def is_soft_double(name):
+def is_soft_double_name(name):
     return bool(SOFT_DOUBLE_RE.match(name)) or name in DOUBLE_LIBM
 
 
 class Image:
     def __init__(self, args):
         self.elf = args.elf
-        self.nm = args.nm
+        self.readelf = args.readelf
         self.objdump = args.objdump
         self.functions = {}   # name -> (addr, size)
-        self.by_addr = {}     # addr -> name
+        self.aliases = {}     # addr -> every function name at that address
         self.objects = {}     # name -> (addr, size) data objects
+        self.markers = {}     # name -> addr of linker-script symbols (NOTYPE)
         self._read_symbols()
+        self.sections = self._read_sections()
         self.owner_ranges = self._read_map(args.map)
         self._starts = [r[0] for r in self.owner_ranges]
         self.members = self._read_archive_members(args.map)
         self.frames, self.frame_kind = self._read_frames(args.callgraph_dir)
-        self.edges, self.indirect_callers, self.dynamic_sp = self._read_disassembly()
-        self.address_taken = self._address_taken()
+        self.edges, self.indirect_sites, self.dynamic_sp = self._read_disassembly()
+        self.address_taken = self._resolve_indirect()
+
+    def _read_sections(self):
+        out = []
+        for line in run([self.readelf, "-SW", self.elf]).splitlines():
+            m = re.match(r"^\s*\[\s*\d+\]\s+(\S+)\s+\S+\s+([0-9a-f]{8})\s+[0-9a-f]+\s+([0-9a-f]+)", line)
+            if m:
+                out.append((m.group(1), int(m.group(2), 16), int(m.group(3), 16)))
+        return out
 
     def _read_symbols(self):
-        for line in run([self.nm, "-S", "--defined-only", self.elf]).splitlines():
+        """Functions and data objects from the ELF symbol table (readelf: FUNC / OBJECT)."""
+        for line in run([self.readelf, "-sW", self.elf]).splitlines():
             parts = line.split()
-            if len(parts) != 4:
+            if len(parts) != 8 or not parts[0][:-1].isdigit() or parts[6] == "UND":
                 continue
-            addr, size, kind, name = int(parts[0], 16), int(parts[1], 16), parts[2], parts[3]
-            if kind in "tTwW":
+            addr, size, kind, name = int(parts[1], 16), int(parts[2], 0), parts[3], parts[7]
+            if kind == "FUNC":
                 addr &= ~1
                 self.functions.setdefault(name, (addr, size))
-                self.by_addr.setdefault(addr, name)
-            elif kind in "bBdDrR":
+                self.aliases.setdefault(addr, set()).add(name)
+            elif kind == "OBJECT":
                 self.objects[name] = (addr, size)
+            elif kind == "NOTYPE":
+                self.markers[name] = addr
+
+    def section_of(self, addr):
+        for name, start, size in self.sections:
+            if start <= addr < start + size:
+                return name
+        return ""
+
+    def canonical(self, name):
+        """One name per address (aliases such as malloc/__malloc_malloc collapse)."""
+        if name not in self.functions:
+            return name
+        return min(self.aliases[self.functions[name][0]])
+
+    def names_of(self, name):
+        if name not in self.functions:
+            return {name}
+        return self.aliases[self.functions[name][0]]
 
     @staticmethod
     def _read_archive_members(path):
@@ -134,8 +166,10 @@ class Image:
                     continue
                 m = line_re.match(line.rstrip("\n"))
                 if m and (m.group(1) or pending):
+                    name = m.group(1) or pending
                     start, size = int(m.group(2), 16), int(m.group(3), 16)
-                    if size > 0 and not m.group(4).startswith("load address"):
+                    allocated = not name.startswith(NOT_ALLOCATED)
+                    if size > 0 and allocated and not m.group(4).startswith("load address"):
                         ranges.append((start, start + size, m.group(4).strip()))
                     pending = None
                     continue
@@ -170,21 +204,26 @@ class Image:
         return frames, kinds
 
     def _read_disassembly(self):
+        """Direct call edges, indirect call sites, frame sizes from prologues, dynamic sp users."""
         edges = {}
-        indirect = set()
+        sites = {}     # function -> list of (slot offset or None, loaded through a vptr)
         dynamic = set()
         prologue = {}
+        loads = {}     # register -> (base register, offset, base loaded from offset 0)
         current = None
         head_re = re.compile(r"^([0-9a-f]+) <([^>]+)>:$")
         insn_re = re.compile(r"^\s+[0-9a-f]+:\s+(\S+)\s*(.*)$")
         target_re = re.compile(r"<([^>+]+)(\+0x[0-9a-f]+)?>")
+        ldr_re = re.compile(r"^(r\d+|ip|lr|sl|fp),\s*\[(r\d+|ip|lr|sl|fp|sp)(?:,\s*#(-?\d+))?\]$")
+        reg_re = re.compile(r"^(r\d+|ip|sl|fp)$")
         out = run([self.objdump, "-d", "--no-show-raw-insn", self.elf])
         for line in out.splitlines():
             h = head_re.match(line)
             if h:
-                current = h.group(2)
+                current = self.canonical(h.group(2))
                 edges.setdefault(current, set())
                 prologue.setdefault(current, 0)
+                loads = {}
                 continue
             m = insn_re.match(line)
             if not m or current is None:
@@ -193,11 +232,14 @@ class Image:
             base = op.split(".")[0]
             if base in ("bl", "blx", "b", "bx") or (base.startswith("b") and base[1:] in CONDITIONS):
                 t = target_re.search(operands)
-                if t and not t.group(2) and t.group(1) != current and t.group(1) in self.functions:
-                    edges[current].add(t.group(1))
-                elif base in ("blx", "bx") and re.match(r"^(r\d+|ip|sl|fp)$", operands):
-                    indirect.add(current)
-            elif base in ("push", "stmdb", "stmfd") and (base == "push" or operands.startswith("sp!")):
+                target = self.canonical(t.group(1)) if t else None
+                if t and not t.group(2) and target != current and target in self.functions:
+                    edges[current].add(target)
+                elif base in ("blx", "bx") and reg_re.match(operands):
+                    src = loads.get(operands)
+                    sites.setdefault(current, []).append((src[1], src[2]) if src else (None, False))
+                continue
+            if base in ("push", "stmdb", "stmfd") and (base == "push" or operands.startswith("sp!")):
                 prologue[current] += 4 * count_registers(operands)
             elif base in ("vpush", "vstmdb") and (base == "vpush" or operands.startswith("sp!")):
                 prologue[current] += count_fp_bytes(operands)
@@ -205,35 +247,95 @@ class Image:
                 prologue[current] += int(operands.split("#")[1].split()[0], 0)
             elif base in ("sub", "subw") and re.match(r"^sp,\s*(sp,\s*)?r", operands):
                 dynamic.add(current)
+            # Register tracking for indirect calls: which load produced the call target.
+            dest = operands.split(",")[0].strip()
+            lm = ldr_re.match(operands) if base == "ldr" else None
+            if lm:
+                b = loads.get(lm.group(2))
+                through_vptr = b is not None and b[1] == 0
+                loads[lm.group(1)] = (lm.group(2), int(lm.group(3) or 0), through_vptr)
+            elif base not in NON_WRITING and dest in loads:
+                del loads[dest]
         self.prologue = prologue
-        return edges, indirect, dynamic
+        return edges, sites, dynamic
 
-    def _address_taken(self):
-        """Functions whose address (Thumb bit set) is stored in the image's data or literals."""
+    def _words(self):
+        """addr -> 32-bit word of every allocated PROGBITS section."""
         with open(self.elf, "rb") as f:
             data = f.read()
         shoff, = struct.unpack_from("<I", data, 0x20)
         shentsize, shnum = struct.unpack_from("<HH", data, 0x2E)
-        thumb_addrs = {addr | 1: name for name, (addr, _) in self.functions.items()}
-        taken = set()
+        words = {}
         for i in range(shnum):
-            _, sh_type, flags, _, offset, size = struct.unpack_from("<IIIIII", data, shoff + i * shentsize)
+            _, sh_type, flags, addr, offset, size = struct.unpack_from("<IIIIII", data, shoff + i * shentsize)
             if sh_type != 1 or not flags & 2:  # PROGBITS, ALLOC
                 continue
-            for off in range(offset, offset + size - 3, 4):
-                word, = struct.unpack_from("<I", data, off)
-                if word in thumb_addrs:
-                    taken.add(thumb_addrs[word])
-        vectors = {ENTRY, "Fault_Handler", "Unexpected_Handler"}
+            for k in range(0, size - 3, 4):
+                words[addr + k], = struct.unpack_from("<I", data, offset + k)
+        return words
+
+    def _resolve_indirect(self):
+        """Candidate targets of indirect calls: vtable slots, init_array, other address-taken functions."""
+        words = self._words()
+        thumb = {addr | 1: min(names) for addr, names in self.aliases.items()}
+        vtable_slots, in_vtables = {}, set()
+        for name, (addr, size) in self.objects.items():
+            if not name.startswith("_ZTV"):
+                continue
+            for k in range(8, size, 4):  # skip offset-to-top and typeinfo: the vptr points at slot 0
+                fn = thumb.get(words.get(addr + k))
+                if fn:
+                    vtable_slots.setdefault(k - 8, set()).add(fn)
+                    in_vtables.add(fn)
+        init = set()
+        lo, hi = self.markers.get("__init_array_start"), self.markers.get("__init_array_end")
+        if lo is not None and hi is not None:
+            init = {thumb[words[a]] for a in range(lo, hi, 4) if words.get(a) in thumb}
+        # Exception handlers (the vector table) and main are entered by the hardware and
+        # the reset code only; a data word that happens to equal their address is no call.
+        vectors = {"main"}
+        for name, (a, size) in self.objects.items():
+            if "kVectors" in name:
+                vectors |= {thumb[words[x]] for x in range(a, a + size, 4) if words.get(x) in thumb}
+        taken = {thumb[w] for w in words.values() if w in thumb}
+        others = taken - in_vtables - init - vectors
+        self.vtable_slots = vtable_slots
+        self.vtable_functions = in_vtables
+        self.init_functions = init
+        self.pointer_targets_lib = {f for f in others if self.is_library(f)}
+        self.pointer_targets_ours = others - self.pointer_targets_lib
         return sorted(taken - vectors)
 
+    def is_library(self, name):
+        return "/usr/lib/" in self.owner(name)
+
+    def is_soft_double(self, name):
+        return any(is_soft_double_name(n) for n in self.names_of(name))
+
     def frame(self, name):
-        return self.frames.get(name, self.prologue.get(name, 0))
+        for n in self.names_of(name):
+            if n in self.frames:
+                return self.frames[n]
+        return self.prologue.get(name, 0)
 
     def callees(self, name):
+        """Direct callees plus the candidates of each indirect call site (docs/footprint.md):
+        Reset_Handler -> static constructors; library code -> library functions whose address
+        is taken; a call through a vtable slot -> that slot of every vtable; any other call
+        in our code -> our non-virtual address-taken functions (and every virtual function
+        when the target's origin is unknown)."""
         out = set(self.edges.get(name, ()))
-        if name in self.indirect_callers:
-            out.update(self.address_taken)
+        for off, through_vptr in self.indirect_sites.get(name, ()):
+            if name == ENTRY:
+                out |= self.init_functions
+            elif self.is_library(name):
+                out |= self.pointer_targets_lib
+            elif through_vptr and off in self.vtable_slots:
+                out |= self.vtable_slots[off]
+            elif off is None:
+                out |= self.pointer_targets_ours | self.vtable_functions
+            else:
+                out |= self.pointer_targets_ours
         return out
 
     def reachable(self, roots):
@@ -271,6 +373,9 @@ class Image:
         return depth, path, cycles
 
 
+# Instructions whose first operand is not a destination register.
+NON_WRITING = {"str", "strb", "strh", "strd", "cmp", "cmn", "tst", "teq", "push", "pop", "stm", "stmia", "stmdb",
+               "vstr", "vpush", "vstmia", "vstmdb", "it", "ite", "itt", "itte", "ittt", "nop", "dmb", "dsb", "isb"}
 CONDITIONS = {"eq", "ne", "cs", "hs", "cc", "lo", "mi", "pl", "vs", "vc", "hi", "ls", "ge", "lt", "gt", "le", "al"}
 
 
@@ -304,7 +409,11 @@ def check(img, args):
     errors = []
     for name in sorted(img.functions):
         owner = img.owner(name)
+        canonical = img.canonical(name)
         why = "; ".join(img.pulled_in_by(owner))
+        callers = sorted(f for f, cs in img.edges.items() if canonical in cs and "hal/mps2" not in img.owner(f))
+        if callers:
+            why += "; called by " + ", ".join(callers[:3]) + (" ..." if len(callers) > 3 else "")
         if name in HEAP_SYMBOLS or NEW_RE.match(name):
             errors.append(f"heap: {name} is linked ({owner}; {why})")
         elif name in EXCEPTION_SYMBOLS:
@@ -315,13 +424,13 @@ def check(img, args):
     for fn, helper in soft:
         errors.append(f"soft-double in the estimator hot path: {fn} calls {helper}")
     if errors:
-        names = sorted({e.split(": ", 1)[1].split(" ")[0] for e in errors})
-        pretty = demangle(names, args.cxxfilt)
+        mangled = sorted({w.strip(",;()") for e in errors for w in e.split() if w.startswith("_Z")})
+        pretty = demangle(mangled, args.cxxfilt)
         sys.stderr.write("image_analysis: uwbnav_mps2.elf violates the firmware rules:\n")
         for e in errors:
-            kind, rest = e.split(": ", 1)
-            first = rest.split(" ")[0]
-            sys.stderr.write(f"  {kind}: {pretty.get(first, first)}{rest[len(first):]}\n")
+            for m in mangled:
+                e = e.replace(m, pretty.get(m, m))
+            sys.stderr.write(f"  {e}\n")
         return 1
     print(f"image_analysis: no heap, no exceptions, no soft-double in the estimator hot path "
           f"({len(estimator_hot_path(img, args.estimator_lib))} estimator functions)")
@@ -348,7 +457,7 @@ def soft_double_hot_path(img, estimator_lib):
                 continue
             seen.add(n)
             for c in img.callees(n):
-                if is_soft_double(c):
+                if img.is_soft_double(c):
                     found.append((fn if n == fn else f"{fn} (via {n})", c))
                 elif c not in seen and "uwbnav" not in img.owner(c) and "hal/mps2" not in img.owner(c):
                     todo.append(c)
@@ -368,8 +477,12 @@ def footprint(img, args):
     sec = sections(args.elf, args.size)
     flash = sec.get(".text", 0) + sec.get(".data", 0) + sec.get(".tdata", 0)
     ram_static = sum(sec.get(s, 0) for s in (".data", ".tdata", ".tbss", ".bss"))
-    objects = sorted(((size, name) for name, (_, size) in img.objects.items() if size > 0), reverse=True)
-    top_objects = [(name, size, img.owner(name)) for size, name in objects[:12]]
+    ram = sorted(((size, name) for name, (a, size) in img.objects.items() if size > 0 and a >= RAM_BASE),
+                 reverse=True)
+    top_objects = [(name, size, img.owner(name)) for size, name in ram[:10]]
+    rom = sorted(((size, name) for name, (a, size) in img.objects.items()
+                  if size > 0 and a < RAM_BASE and "replay_data" not in img.section_of(a)), reverse=True)
+    top_rom = [(name, size, img.owner(name)) for size, name in rom[:8]]
     depth, path, cycles = img.deepest(ENTRY)
     tick_depth, tick_path, _ = img.deepest(HOT_ROOT)
     init_depth, _, _ = img.deepest(INIT_ROOT)
@@ -379,11 +492,11 @@ def footprint(img, args):
     estimator_hot = set(estimator_hot_path(img, args.estimator_lib))
     soft_hot = soft_double_hot_path(img, args.estimator_lib)
     soft_cold = sorted({(n, c) for n in img.functions if lib in img.owner(n) and n not in estimator_hot
-                        for c in img.callees(n) if is_soft_double(c)})
+                        for c in img.callees(n) if img.is_soft_double(c)})
     soft_fw_hot = sorted({(n, c) for n in hot if "libuwbnav_firmware" in img.owner(n)
-                          for c in img.callees(n) if is_soft_double(c)})
+                          for c in img.callees(n) if img.is_soft_double(c)})
     names = {n for n, _ in soft_hot + soft_cold + soft_fw_hot} | set(path) | set(tick_path)
-    names |= {n for n, _, _ in top_objects}
+    names |= {n for n, _, _ in top_objects + top_rom}
     names = sorted(n.split(" ")[0] for n in names)
     pretty = demangle(names, args.cxxfilt)
     from_prologue = [n for n in img.reachable([ENTRY]) if n not in img.frames]
@@ -403,8 +516,9 @@ def footprint(img, args):
         "stack_dynamic_functions": sorted(pretty.get(n, n) for n in img.dynamic_sp),
         "stack_frames_from_prologue": len(from_prologue),
         "stack_frames_from_gcc": len(img.reachable([ENTRY])) - len(from_prologue),
-        "indirect_call_targets": len(img.address_taken),
+        "indirect_call_sites": sum(len(v) for v in img.indirect_sites.values()),
         "ram_objects": [(pretty.get(n, n), s, os.path.basename(o)) for n, s, o in top_objects],
+        "flash_objects": [(pretty.get(n, n), s, os.path.basename(o)) for n, s, o in top_rom],
         "tick_functions": len(hot),
         "estimator_hot_functions": len(estimator_hot),
         "soft_double_estimator_hot": [(pretty.get(n.split(" ")[0], n), c) for n, c in soft_hot],
@@ -423,7 +537,7 @@ def main():
     p.add_argument("--map", required=True)
     p.add_argument("--estimator-lib", required=True, help="libuwbnav_estimator.a (ownership of estimator code)")
     p.add_argument("--callgraph-dir", required=True, help="build tree holding the .ci files")
-    p.add_argument("--nm", default="arm-none-eabi-nm")
+    p.add_argument("--readelf", default="arm-none-eabi-readelf")
     p.add_argument("--objdump", default="arm-none-eabi-objdump")
     p.add_argument("--size", default="arm-none-eabi-size")
     p.add_argument("--cxxfilt", default="arm-none-eabi-c++filt")

@@ -7,12 +7,16 @@ int cmd_sim(int argc, char** argv);
 int cmd_replay(int argc, char** argv);
 int cmd_run(int argc, char** argv);
 int cmd_params(int argc, char** argv);
+int cmd_eval(int argc, char** argv);
+int cmd_train_svm(int argc, char** argv);
 
 const std::vector<Command>& commands() {
   static const std::vector<Command> table = {
       {"run", "main job: simulate the default scenario, run the firmware loop, print the result table", cmd_run},
       {"sim", "simulate a scenario into a format v1 recording: sim SCENARIO --out DIR [--seed N]", cmd_sim},
       {"replay", "run the firmware loop in lockstep over a recording: replay DIR --out OUT", cmd_replay},
+      {"eval", "evaluation: eval report RECORDING... --out DIR | eval nlos (NLOS identification tables)", cmd_eval},
+      {"train-svm", "train the NLOS SVM with libsvm and export the firmware model (docs/nlos.md)", cmd_train_svm},
       {"params", "print the parameter table (--markdown: docs/parameters.md)", cmd_params},
   };
   return table;

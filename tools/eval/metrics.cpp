@@ -55,7 +55,11 @@ AccuracyStats accuracy(const std::vector<ErrorSample>& errors, size_t epochs_tot
   st.epochs = errors.size();
   st.epochs_total = epochs_total;
   if (errors.empty()) {
-    st.rmse_h_m = st.max_h_m = st.std_h_m = st.mean_h_m = std::nan("");
+    const double nan = std::nan("");
+    st.rmse_h_m = st.max_h_m = st.std_h_m = st.mean_h_m = nan;
+    st.p50_east_m = st.p70_east_m = st.p90_east_m = nan;
+    st.p50_north_m = st.p70_north_m = st.p90_north_m = nan;
+    st.inside_2sigma_x = st.inside_2sigma_y = nan;
     return st;
   }
   std::vector<double> h, ex, ey;

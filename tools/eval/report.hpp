@@ -8,28 +8,17 @@
 #include <vector>
 
 #include "tools/dataset/recording.hpp"
+#include "tools/eval/eval_nlos.hpp"
 #include "tools/eval/metrics.hpp"
 
 namespace uwbnav::eval {
-
-// NLOS decision quality against the recording's labels (seed 000 eq. 11-13).
-struct Confusion {
-  uint64_t tp = 0, fp = 0, tn = 0, fn = 0;
-  double precision() const { return tp + fp ? static_cast<double>(tp) / static_cast<double>(tp + fp) : 0.0; }
-  double recall() const { return tp + fn ? static_cast<double>(tp) / static_cast<double>(tp + fn) : 0.0; }
-  double accuracy() const {
-    const uint64_t n = tp + fp + tn + fn;
-    return n ? static_cast<double>(tp + tn) / static_cast<double>(n) : 0.0;
-  }
-  uint64_t total() const { return tp + fp + tn + fn; }
-};
 
 struct MethodResult {
   std::string name;          // row label
   std::string key;           // file-name friendly id
   AccuracyStats acc;
   bool has_nlos = false;     // the method makes per-range NLOS decisions
-  Confusion nlos;
+  Confusion nlos;            // NLOS decisions vs labels (seed 000 eq. 11-13)
   double us_per_cycle = 0.0; // host wall time per 10 ms cycle [us]
   uint64_t ranges_used = 0, ranges_rejected = 0;
   std::vector<ErrorSample> errors;              // for the series / figures
