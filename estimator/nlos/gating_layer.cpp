@@ -3,6 +3,7 @@
 #include "estimator/nlos/gating_layer.hpp"
 
 #include <cmath>
+#include <cstdlib>
 
 #include "estimator/nlos/channel.hpp"
 #include "estimator/nlos/consistency.hpp"
@@ -318,7 +319,7 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
       escape_active_ = false;
     }
     if (escape_active_ && std::isfinite(ctx.innovation_m)) {
-      const float factor = residual_inflation_factor(e.z, resid_th_, resid_beta_);
+      const float f1 = residual_inflation_factor(e.z, resid_th_, resid_beta_); const float factor = getenv("RPOW") ? f1 * f1 / resid_beta_ : f1;
       d.use = true;
       d.r_scale = std::isfinite(factor) ? std::fmax(factor, escape_r_scale_) : escape_r_scale_;
       ++slot.stats.escape_count;

@@ -42,6 +42,7 @@ void Console::poll(uint64_t now_us) {
   if (job_ == Job::kNone) process_input();
   run_job();
   run_streams();
+  redraw_prompt();
   flush();
   if (poll_commands_ > stats_.max_commands_per_poll) stats_.max_commands_per_poll = poll_commands_;
 }
@@ -66,6 +67,7 @@ void Console::process_input() {
     }
     const LineEditor::Event e = editor_.feed(rx_buf_[rx_pos_++]);
     ++fed;
+    if (e != LineEditor::Event::kNone) prompt_visible_ = false;  // the cursor moved to a new line
     if (echo_ && editor_.echo_len() > 0) queue_raw(editor_.echo(), editor_.echo_len());
     switch (e) {
       case LineEditor::Event::kNone:
@@ -218,14 +220,14 @@ void Console::run_streams() {
     if (stream_next_us_[k] <= now_us_) stream_next_us_[k] = now_us_ + period_us;  // late start or a gap
     switch (static_cast<StreamKind>(k)) {
       case StreamKind::kPos:
-        begin("$pos");
+        begin_async("$pos");
         add_pos_fields();
         end_line(kReplyReserve);
         break;
       case StreamKind::kStats: {
         const AppStats& s = app_.stats();
         const hal::CanCounters& c = app_.board().can.counters();
-        begin("$stats");
+        begin_async("$stats");
         add(" t_us=%llu imu_rx=%lu imu_ok=%lu uwb_rx=%lu uwb_ok=%lu uwb_rej=%lu cycles=%llu overruns=%llu"
             " cycle_max_us=%lu can_tx_ok=%lu can_tx_dropped=%lu dropped_bytes=%llu",
             static_cast<unsigned long long>(now_us_), static_cast<unsigned long>(s.imu.received),
@@ -327,12 +329,38 @@ bool Console::queue(const char* text, size_t len, size_t reserve) {
 void Console::queue_raw(const char* text, size_t len) { (void)queue(text, len, 0); }
 
 void Console::prompt() {
-  if (echo_) queue_raw(LineEditor::kPrompt, std::strlen(LineEditor::kPrompt));
+  if (!echo_) return;
+  queue_raw(LineEditor::kPrompt, std::strlen(LineEditor::kPrompt));
+  prompt_visible_ = true;
+}
+
+// Streams and logs are asynchronous: with echo on, each first erases the
+// prompt line (and what is typed on it), which is then drawn again once.
+void Console::begin_async(const char* tag) {
+  begin(echo_ && prompt_visible_ ? "\r\x1b[K" : "");
+  add("%s", tag);
+  if (echo_ && prompt_visible_) redraw_ = true;
+}
+
+void Console::redraw_prompt() {
+  if (!redraw_) return;
+  redraw_ = false;
+  if (!echo_ || job_ != Job::kNone) return;
+  queue_raw(LineEditor::kPrompt, std::strlen(LineEditor::kPrompt));
+  if (editor_.pending_len() > 0) queue_raw(editor_.pending(), editor_.pending_len());
 }
 
 void Console::log_line(LogLevel level, const char* text, size_t len) {
-  if (len > kOutLineMax - 2) len = kOutLineMax - 2;
-  std::memcpy(out_log_, text, len);
+  static constexpr char kErase[] = "\r\x1b[K";
+  size_t n = 0;
+  if (echo_ && prompt_visible_) {
+    std::memcpy(out_log_, kErase, sizeof kErase - 1);
+    n = sizeof kErase - 1;
+    redraw_ = true;
+  }
+  if (len > kOutLineMax - 2 - n) len = kOutLineMax - 2 - n;
+  std::memcpy(out_log_ + n, text, len);
+  len += n;
   out_log_[len++] = '\r';
   out_log_[len++] = '\n';
   // Errors and warnings may use the reply reserve; info and debug leave it free.

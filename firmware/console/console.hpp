@@ -120,6 +120,8 @@ class Console final : public LogSink {
   bool queue(const char* text, size_t len, size_t reserve);
   void queue_raw(const char* text, size_t len);
   void prompt();
+  void begin_async(const char* tag);
+  void redraw_prompt();
 
   // Commands (console_commands.cpp).
   void cmd_help(size_t argc, char** argv);
@@ -152,6 +154,8 @@ class Console final : public LogSink {
   ConsoleStats stats_;
   bool echo_ = true;
   bool banner_done_ = false;
+  bool prompt_visible_ = false;  // the last thing shown is the prompt (and the line being typed)
+  bool redraw_ = false;          // an async line erased the prompt: draw it again
   uint64_t now_us_ = 0;
 
   uint8_t rx_buf_[kRxBytesPerPoll] = {};  // read from the port, not yet fed to the editor

@@ -148,14 +148,20 @@ class ConsoleRig {
   uint64_t ticks = 0;
 };
 
-// Splits console output into lines (CR LF separated; the trailing prompt is dropped).
+// Splits console output into lines as a terminal shows them: CR LF ends a
+// line, a bare CR returns to its start and ESC[K erases it (prompt redraws).
+// The unfinished last line (the prompt) is dropped.
 inline std::vector<std::string> split_lines(const std::string& out) {
   std::vector<std::string> lines;
   size_t pos = 0;
   for (;;) {
     const size_t e = out.find("\r\n", pos);
     if (e == std::string::npos) break;
-    lines.push_back(out.substr(pos, e - pos));
+    std::string line = out.substr(pos, e - pos);
+    const size_t cr = line.rfind('\r');
+    if (cr != std::string::npos) line = line.substr(cr + 1);
+    if (line.rfind("\x1b[K", 0) == 0) line = line.substr(3);
+    lines.push_back(line);
     pos = e + 2;
   }
   return lines;
