@@ -118,19 +118,29 @@ void EkfCore::predict_cv(Real dt_s, Real accel_psd) {
 
 Real EkfCore::innovation_variance(const ErrRow& h, Real r_var) const { return (h * p_ * h.transpose())(0, 0) + r_var; }
 
+Real EkfCore::prepare(const ErrRow& h) {
+  u_.noalias() = p_ * h.transpose();
+  hph_ = h.dot(u_);
+  return hph_;
+}
+
 UpdateResult EkfCore::update(const ScalarObs& obs) {
+  (void)prepare(obs.h);
+  return update_prepared(obs.innovation, obs.r_var);
+}
+
+UpdateResult EkfCore::update_prepared(Real innovation, Real r_var) {
   UpdateResult res;
-  u_.noalias() = p_ * obs.h.transpose();
-  const Real s = obs.h.dot(u_) + obs.r_var;
+  const Real s = hph_ + r_var;
   res.innovation_var = s;
-  if (!(s > Real(0)) || !std::isfinite(s) || !std::isfinite(obs.innovation)) return res;
+  if (!(s > Real(0)) || !std::isfinite(s) || !std::isfinite(innovation)) return res;
   const Real inv_s = Real(1) / s;
   for (int i = 0; i < kN; ++i) {
     if (p_(i, i) - u_(i) * u_(i) * inv_s < Real(0)) return res;  // ArduPilot-style refusal
   }
   // Joseph form with the optimal scalar gain K = u / S (see header).
   p_.noalias() -= (u_ * inv_s) * u_.transpose();
-  inject(u_ * (obs.innovation * inv_s));
+  inject(u_ * (innovation * inv_s));
   res.applied = true;
   return res;
 }
@@ -144,8 +154,11 @@ void EkfCore::inject(const ErrVec& dx) {
   refresh_dcm();
 }
 
-bool EkfCore::sanitise() {
-  if (!p_.allFinite() || !x_.pos_nav_m.allFinite() || !x_.vel_nav_mps.allFinite() || !x_.q_nav_body.allFinite() ||
+bool EkfCore::sanitise(bool symmetrise) {
+  // After a scalar update a NaN would show on the diagonal (u u^T / S): check
+  // the diagonal only; after a prediction check the whole matrix.
+  const bool p_finite = symmetrise ? p_.allFinite() : p_.diagonal().allFinite();
+  if (!p_finite || !x_.pos_nav_m.allFinite() || !x_.vel_nav_mps.allFinite() || !x_.q_nav_body.allFinite() ||
       !x_.ba_body_mps2.allFinite() || !x_.bg_body_radps.allFinite()) {
     return false;
   }
@@ -165,7 +178,7 @@ bool EkfCore::sanitise() {
     }
   }
   // Symmetrise (predict accumulates tiny asymmetries from the block products).
-  p_ = (Real(0.5) * (p_ + p_.transpose())).eval();
+  if (symmetrise) p_ = (Real(0.5) * (p_ + p_.transpose())).eval();
   return true;
 }
 

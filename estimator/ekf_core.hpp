@@ -50,6 +50,12 @@ class EkfCore {
   // Variance of the innovation of `obs` (H P H^T + R).
   Real innovation_variance(const ErrRow& h, Real r_var) const;
 
+  // Two-step form of update() for gated measurements: prepare() caches
+  // u = P H^T and returns H P H^T; update_prepared() then fuses with the
+  // innovation and R chosen after the gate, without recomputing u.
+  Real prepare(const ErrRow& h);
+  UpdateResult update_prepared(Real innovation, Real r_var);
+
   // Scalar update and immediate injection into the nominal state. The
   // covariance update is the Joseph form written for a scalar with the optimal
   // gain, P+ = P - u u^T / S with u = P H^T (algebraically identical to
@@ -58,9 +64,10 @@ class EkfCore {
   UpdateResult update(const ScalarObs& obs);
 
   // Clamps variances to [floor, ceiling] (row/column scaling keeps P positive
-  // semi-definite) and symmetrises. Returns false when P or x is not finite or
+  // semi-definite) and symmetrises (scalar updates keep P exactly symmetric,
+  // so callers skip that part after updates). Returns false when P or x is not finite or
   // the state exploded (caller resets).
-  bool sanitise();
+  bool sanitise(bool symmetrise = true);
 
   // Removes the correlation of attitude and biases with position/velocity and
   // resets their variances (entering the constant-velocity mode).
@@ -83,6 +90,7 @@ class EkfCore {
   // Scratch (members, not function statics).
   ErrCov phi_p_;  // Phi * P (block rows)
   ErrVec u_;      // P H^T
+  Real hph_ = Real(0);  // H P H^T of the prepared measurement
 };
 
 }  // namespace uwbnav

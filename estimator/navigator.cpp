@@ -146,10 +146,12 @@ Status Navigator::on_imu(const ImuSample& imu) {
     return Status::kOk;
   }
   if (cv_mode_) {
-    // IMU back after an outage (or first IMU of a UWB-first start): bridge
-    // with the constant-velocity model, re-level once a window is available.
-    if (imu_mode_since_us_ == 0) imu_mode_since_us_ = imu.t_us;
-    recover_imu_mode();
+    // IMU back after an outage (or first IMU of a UWB-first start): keep the
+    // constant-velocity solution while levelling and heading are re-acquired
+    // exactly as at power-on; start_filter() then switches to the IMU model.
+    if (gap) begin_imu_recovery();
+    if (first_imu_t_us_ == 0) first_imu_t_us_ = imu.t_us;
+    if (!gap) init_on_imu(imu);
     prev_imu_ = imu;
     have_prev_imu_ = true;
     return Status::kOk;
@@ -194,13 +196,12 @@ void Navigator::apply_constraints(uint64_t t_us) {
 
 bool Navigator::fuse(const ScalarObs& obs) { return ekf_.update(obs).applied; }
 
-void Navigator::check_health() {
-  if (!ekf_.sanitise()) restart(true);
+void Navigator::check_health(bool symmetrise) {
+  if (!ekf_.sanitise(symmetrise)) restart(true);
 }
 
 void Navigator::enter_cv_mode() {
   cv_mode_ = true;
-  imu_mode_since_us_ = 0;
   ErrVec sigma = ErrVec::Zero();
   sigma.segment<3>(ErrIdx::kAtt).setConstant(Real(0.1));
   sigma.segment<3>(ErrIdx::kBa).setConstant(cfg_.accel_bias_init);
@@ -209,32 +210,6 @@ void Navigator::enter_cv_mode() {
   // Body level; keep the yaw (used for the lever arm and the heading output).
   ekf_.mutable_state().q_nav_body = quat_from_yaw(quat_yaw(ekf_.state().q_nav_body));
   ekf_.refresh_dcm();
-}
-
-void Navigator::recover_imu_mode() {
-  // Wait for a full rest-detector window of the returned IMU, then take roll
-  // and pitch from the mean specific force (exact at rest, approximate when
-  // moving) and keep the yaw of the constant-velocity solution.
-  if (prev_imu_.t_us - imu_mode_since_us_ < static_cast<uint64_t>(1e6F * 0.6F)) return;
-  rest_.evaluate();
-  if (!rest_.window_full()) return;
-  NominalState& x = ekf_.mutable_state();
-  Real yaw = quat_yaw(x.q_nav_body);
-  const Real speed_h = x.vel_nav_mps.head<2>().norm();
-  const bool track_heading = cfg_.ground_constraints && speed_h > Real(1);
-  if (track_heading) yaw = std::atan2(x.vel_nav_mps.y(), x.vel_nav_mps.x());
-  x.q_nav_body = quat_mul(quat_from_yaw(yaw), quat_level(rest_.accel_mean()));
-  if (rest_.at_rest()) x.bg_body_radps = rest_.gyro_mean();
-  ekf_.refresh_dcm();
-  ErrCov& p = ekf_.mutable_cov();
-  const Real tilt_sigma = rest_.at_rest() ? Real(0.02) : Real(0.1);
-  const Real yaw_sigma = track_heading ? Real(0.2) : Real(1.5);
-  p(ErrIdx::kAtt, ErrIdx::kAtt) = tilt_sigma * tilt_sigma;
-  p(ErrIdx::kAtt + 1, ErrIdx::kAtt + 1) = tilt_sigma * tilt_sigma;
-  p(ErrIdx::kAtt + 2, ErrIdx::kAtt + 2) = yaw_sigma * yaw_sigma;
-  cv_mode_ = false;
-  imu_mode_since_us_ = 0;
-  t_state_us_ = prev_imu_.t_us > t_state_us_ ? prev_imu_.t_us : t_state_us_;
 }
 
 RangeReport Navigator::on_range(const UwbRange& range) {
@@ -268,6 +243,7 @@ RangeReport Navigator::on_range(const UwbRange& range) {
     if (cv_mode_ && range.t_us > t_state_us_) {
       ekf_.predict_cv(seconds(diff_us(range.t_us, t_state_us_)), cfg_.cv_accel_psd);
       t_state_us_ = range.t_us;
+      check_health();
       if (height_on_) apply_constraints(range.t_us);
       // Ground vehicles point where they go: heading from the velocity.
       const Vec3& v = ekf_.state().vel_nav_mps;
@@ -289,7 +265,7 @@ RangeReport Navigator::on_range(const UwbRange& range) {
   }
   Real s_nom = Real(0);
   if (running && pred.valid) {
-    s_nom = ekf_.innovation_variance(pred.h, r_nom);
+    s_nom = ekf_.prepare(pred.h) + r_nom;
     const Real innov = static_cast<Real>(range.range_m) - pred.range_m;
     ctx.tag_pos_nav_m = to_vec3f(pred.tag_pos_nav_m);
     ctx.predicted_range_m = static_cast<float>(pred.range_m);
@@ -300,7 +276,9 @@ RangeReport Navigator::on_range(const UwbRange& range) {
       ctx.dist_since_prev_m = static_cast<float>((pred.tag_pos_nav_m - prev_tag_pos_[ai][ti]).norm());
     }
     const Real sig_h = std::sqrt(ekf_.cov()(0, 0) + ekf_.cov()(1, 1));
-    ctx.filter_ready = sig_h < cfg_.degraded_sigma;
+    // Without IMU the prediction carries no independent motion information
+    // (the consistency evidence of seed 000 eq. 3 needs an inertial distance).
+    ctx.filter_ready = !cv_mode_ && sig_h < cfg_.degraded_sigma;
   }
 
   const GatingDecision d = gating_.assess(ctx);
@@ -311,12 +289,8 @@ RangeReport Navigator::on_range(const UwbRange& range) {
   const Real innov_abs = running && pred.valid ? std::fabs(static_cast<Real>(range.range_m) - pred.range_m) : Real(0);
   const bool gross = innov_abs > kHardGateSigma * std::sqrt(s_nom) && innov_abs > kHardGateMin_m;
   if (running && pred.valid && d.use && !gross) {
-    ScalarObs obs;
-    obs.h = pred.h;
-    obs.innovation = static_cast<Real>(range.range_m) - pred.range_m;
     const Real scale = std::isfinite(d.r_scale) && d.r_scale >= 1.0F ? static_cast<Real>(d.r_scale) : Real(1);
-    obs.r_var = r_nom * scale;
-    used = ekf_.update(obs).applied;
+    used = ekf_.update_prepared(static_cast<Real>(range.range_m) - pred.range_m, r_nom * scale).applied;
   }
   gating_.on_result(ctx, d, used);
 
@@ -353,7 +327,11 @@ RangeReport Navigator::on_range(const UwbRange& range) {
       const Real innov = static_cast<Real>(range.range_m) - pred.range_m;
       monitor_divergence(range.t_us, innov * innov / s_nom);
     }
-    check_health();
+    check_health(false);
+    if (cv_mode_ && imu_alive(range.t_us)) {
+      // IMU recovery: build the LS track and try the heading in the background.
+      if (init_track(ai, ti, range) && levelled_) try_heading(range.t_us);
+    }
   } else {
     init_on_range(ai, ti, range);
   }
@@ -365,6 +343,7 @@ void Navigator::monitor_divergence(uint64_t t_us, Real nis) {
   monitor_bad_[monitor_head_] = !(nis <= cfg_.diverge_nis);
   monitor_head_ = (monitor_head_ + 1) % kMonitorCapacity;
   if (monitor_count_ < kMonitorCapacity) ++monitor_count_;
+  if (!monitor_bad_[(monitor_head_ + kMonitorCapacity - 1) % kMonitorCapacity]) return;  // only a bad range can tip it
   size_t n = 0;
   size_t bad = 0;
   uint64_t oldest = t_us;
@@ -376,7 +355,7 @@ void Navigator::monitor_divergence(uint64_t t_us, Real nis) {
     oldest = monitor_t_us_[i];
   }
   // Judge only a full window with enough ranges (a short burst of NLOS is the gate's business).
-  const bool window_covered = t_us - oldest >= cfg_.diverge_window_us * 3 / 4;
+  const bool window_covered = t_us - oldest >= cfg_.diverge_window_us * 3 / 4 || n >= kMonitorCapacity;
   if (n >= 20 && window_covered && static_cast<Real>(bad) >= cfg_.diverge_fraction * static_cast<Real>(n)) {
     ++diag_.reinits;
     // Keep the attitude and gyro bias (the IMU solution rarely diverges in

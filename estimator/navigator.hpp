@@ -126,6 +126,8 @@ class Navigator {
   void restart(bool counted_reset);
   void init_on_imu(const ImuSample& imu);
   void init_on_range(int anchor_index, int tag_index, const UwbRange& range);
+  bool init_track(int anchor_index, int tag_index, const UwbRange& range);
+  void begin_imu_recovery();
   bool try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix);
   void try_heading(uint64_t t_us);
   bool track_moving(uint64_t t_us) const;
@@ -137,10 +139,9 @@ class Navigator {
   // navigator.cpp
   bool imu_alive(uint64_t t_us) const;
   void enter_cv_mode();
-  void recover_imu_mode();
   void apply_constraints(uint64_t t_us);
   bool fuse(const ScalarObs& obs);
-  void check_health();
+  void check_health(bool symmetrise = true);
   void monitor_divergence(uint64_t t_us, Real nis);
   Vec3 lever(int tag_index) const;
 
@@ -164,7 +165,6 @@ class Navigator {
   uint64_t t_state_us_ = 0;      // time of the filter state [us]
   uint64_t running_since_us_ = 0;  // time the filter (re)started [us]
   uint64_t last_constraint_us_ = 0;
-  uint64_t imu_mode_since_us_ = 0;  // IMU back after an outage: re-levelling pending
 
   bool have_prev_imu_ = false;
   ImuSample prev_imu_;

@@ -51,7 +51,6 @@ void Navigator::restart(bool counted_reset) {
   window_us_ = cfg_.init_window_us;
   window_grow_t_us_ = 0;
   heading_wait_since_us_ = 0;
-  imu_mode_since_us_ = 0;
   last_constraint_us_ = 0;
   have_fix_ = false;
   gating_.reset();
@@ -139,7 +138,7 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix) {
   return std::isfinite(fix.sigma_h_m);
 }
 
-void Navigator::init_on_range(int anchor_index, int tag_index, const UwbRange& range) {
+bool Navigator::init_track(int anchor_index, int tag_index, const UwbRange& range) {
   const uint64_t t = range.t_us;
   pair_[anchor_index][tag_index] = PairRange{t, range.range_m, true};
   if (first_range_t_us_ == 0) {
@@ -152,20 +151,36 @@ void Navigator::init_on_range(int anchor_index, int tag_index, const UwbRange& r
     window_grow_t_us_ = t;
   }
   TrackFix fix;
-  const bool got_fix = try_ls_fix(t, tag_index, fix);
-  if (got_fix) {
-    have_fix_ = true;
-    last_fix_origin_nav_m_ = fix.tag_pos_nav_m - quat_to_dcm(q_init_) * lever(tag_index);
-    // Thin the track to ~10 Hz so the ring spans the first metres even when slow.
-    const TrackFix& prev = track_[(track_head_ + kTrackCapacity - 1) % kTrackCapacity];
-    if (track_count_ == 0 || fix.t_us - prev.t_us >= kTrackSpacingUs || prev.tag_index != fix.tag_index) {
-      track_[track_head_] = fix;
-      track_head_ = (track_head_ + 1) % kTrackCapacity;
-      if (track_count_ < kTrackCapacity) ++track_count_;
-    }
-    last_fix_per_tag_[tag_index] = fix;
+  if (!try_ls_fix(t, tag_index, fix)) return false;
+  have_fix_ = true;
+  last_fix_origin_nav_m_ = fix.tag_pos_nav_m - quat_to_dcm(q_init_) * lever(tag_index);
+  // Thin the track to ~10 Hz so the ring spans the first metres even when slow.
+  const TrackFix& prev = track_[(track_head_ + kTrackCapacity - 1) % kTrackCapacity];
+  if (track_count_ == 0 || fix.t_us - prev.t_us >= kTrackSpacingUs || prev.tag_index != fix.tag_index) {
+    track_[track_head_] = fix;
+    track_head_ = (track_head_ + 1) % kTrackCapacity;
+    if (track_count_ < kTrackCapacity) ++track_count_;
   }
+  last_fix_per_tag_[tag_index] = fix;
+  return true;
+}
+
+void Navigator::begin_imu_recovery() {
+  levelled_ = false;
+  levelled_at_rest_ = false;
+  q_init_ = Quat(1, 0, 0, 0);
+  bg_init_.setZero();
+  track_head_ = 0;
+  track_count_ = 0;
+  for (auto& f : last_fix_per_tag_) f = TrackFix{};
+  first_imu_t_us_ = 0;
+}
+
+void Navigator::init_on_range(int anchor_index, int tag_index, const UwbRange& range) {
+  const uint64_t t = range.t_us;
+  const bool got_fix = init_track(anchor_index, tag_index, range);
   if (!have_fix_) return;
+  const TrackFix& fix = track_[(track_head_ + kTrackCapacity - 1) % kTrackCapacity];
 
   const bool imu_now = imu_alive(t);
   const bool imu_expected = site_.has_imu && t - first_range_t_us_ <= cfg_.imu_timeout_us;
@@ -312,7 +327,6 @@ void Navigator::start_cv_filter(uint64_t t_us, const TrackFix& fix) {
   ekf_.init(x, sigma);
   phase_ = Phase::kRunning;
   cv_mode_ = true;
-  imu_mode_since_us_ = 0;
   t_state_us_ = t_us;
   running_since_us_ = t_us;
   after_failure_ = false;

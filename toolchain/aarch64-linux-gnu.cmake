@@ -20,8 +20,8 @@ set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)
 set(CMAKE_FIND_ROOT_PATH_MODE_LIBRARY ONLY)
 set(CMAKE_FIND_ROOT_PATH_MODE_INCLUDE ONLY)
 set(CMAKE_FIND_ROOT_PATH_MODE_PACKAGE ONLY)
-# Static libsvm: the test binaries then need only the cross libc at run time.
-set(CMAKE_FIND_LIBRARY_SUFFIXES .a .so)
+# Static libsvm (libsvm-dev:arm64): binaries then need only the cross libc at run time.
+set(LIBSVM_LIBRARY /usr/lib/aarch64-linux-gnu/libsvm.a CACHE FILEPATH "libsvm for aarch64 (static)")
 
 # Header-only Eigen from the host (architecture independent).
 set(Eigen3_DIR /usr/share/eigen3/cmake CACHE PATH "Eigen3Config.cmake (header-only, from libeigen3-dev)")

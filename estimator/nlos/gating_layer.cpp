@@ -34,7 +34,8 @@ float distance_m(const Vec3f& a, const Vec3f& b) {
 float innovation_p_nlos(float z, float z0) {
   if (!std::isfinite(z)) return kNaNf;
   const float p = 1.0F / (1.0F + std::exp(-2.0F * (z - z0)));
-  return std::fmin(std::fmax(p, 0.005F), 0.995F);
+  const float lo = getenv("PLO") ? std::strtof(getenv("PLO"), nullptr) : 0.005F;
+  return std::fmin(std::fmax(p, lo), 1.0F - lo);
 }
 
 }  // namespace
@@ -82,11 +83,12 @@ void GatingLayer::update_params(const Params& params) {
   innov_z0_ = params[ParamId::kGateInnovZ0];
   verify_frac_ = params[ParamId::kGateVerifyFrac];
   drift_frac_ = params[ParamId::kGateDriftFrac];
+  warmup_us_ = static_cast<uint64_t>(static_cast<double>(params[ParamId::kGateWarmupS]) * 1e6);
 }
 
 void GatingLayer::reset() {
   for (Slot& s : slots_) s = Slot{};
-  last_los_t_us_ = 0;
+  last_pass_t_us_ = 0;
   seen_ready_ = false;
   escape_active_ = false;
   los_share_ = 0.0F;
@@ -265,7 +267,17 @@ GatingDecision GatingLayer::decide_raim(const RangeContext& ctx, int slot) const
 GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Evidence& e, Slot& slot) {
   GatingDecision d;
   const float p_innov = innovation_p_nlos(e.z, innov_z0_);
-  const float evidence[4] = {e.p_svm2, e.p_mc, e.p_chan, p_innov};
+  // With a prediction the normalised innovation supersedes the coarse models of seed 000
+  // (SVM, consistency), which only read the same filter's speed and travelled distance and
+  // measurably add false alarms (docs/nlos.md); they decide while the filter is not ready.
+  // The coarse models also give way to channel diagnostics when the radio reports them
+  // (measured: they add false alarms there). Before the filter runs there is no speed
+  // either: the range-rate-only SVM1 is used then.
+  const bool have_innov = std::isfinite(p_innov);
+  const bool coarse = !have_innov && !std::isfinite(e.p_chan);
+  float p_coarse = kNaNf;
+  if (coarse) p_coarse = std::isfinite(e.p_svm2) ? e.p_svm2 : svm_p(svm1_, e, ctx);
+  const float evidence[4] = {p_coarse, coarse ? e.p_mc : kNaNf, e.p_chan, p_innov};
   const float r = ds_combine_all(evidence, 4);
   d.p_fused = r;
   d.nlos = r > default_nlos_;
@@ -298,7 +310,9 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
   // its own gate. (Ranges held back by the hysteresis do not count as rejected: the
   // filter agrees with them.) In robust mode every finite range is fused with R inflated by the seed
   // 003 factor of its residual (at least escape_r_scale): an iteratively reweighted update
-  // in which the consistent ranges dominate. It ends when the share exceeds verify_frac.
+  // in which the consistent ranges dominate. It ends when the share exceeds verify_frac,
+  // at the earliest warmup_s after the first convergence (heading and velocity of a filter
+  // initialised on the move need some driving before its own covariance can be trusted).
   // The share uses the nominal sigma_uwb, not S: a filter with a large covariance has not
   // shown that it agrees with the ranges.
   if (ctx.filter_ready && escape_us_ > 0) {
@@ -309,20 +323,36 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
     }
     const bool first_ready = !seen_ready_;
     seen_ready_ = true;
-    if (first_ready || !d.nlos) last_los_t_us_ = ctx.range.t_us;
-    const bool starved = ctx.range.t_us - last_los_t_us_ > escape_us_;
+    if (first_ready) {
+      first_ready_t_us_ = ctx.range.t_us;
+      last_pass_t_us_ = ctx.range.t_us;
+    }
+    const bool warming_up = ctx.range.t_us - first_ready_t_us_ < warmup_us_;
+    const bool starved = ctx.range.t_us - last_pass_t_us_ > escape_us_;
     if (!escape_active_ && (first_ready || starved || los_share_ < drift_frac_)) {
       escape_active_ = true;
       ++escape_entries_;
       los_share_ = 0.0F;
-    } else if (escape_active_ && los_share_ > verify_frac_) {
+    } else if (escape_active_ && !warming_up && los_share_ > verify_frac_) {
       escape_active_ = false;
     }
-    if (escape_active_ && std::isfinite(ctx.innovation_m)) {
-      const float f1 = residual_inflation_factor(e.z, resid_th_, resid_beta_); const float factor = getenv("RPOW") ? f1 * f1 / resid_beta_ : f1;
-      d.use = true;
-      d.r_scale = std::isfinite(factor) ? std::fmax(factor, escape_r_scale_) : escape_r_scale_;
-      ++slot.stats.escape_count;
+    if (escape_active_) {
+      // Robust mode ignores the filter-derived evidence (SVM speed, consistency distance,
+      // hysteresis): the plain chi-square gate on S plus seed 003 inflation, and the
+      // filter-independent channel evidence. While the filter disagrees with most ranges
+      // (share below drift_frac) or passes none (starved), every range is admitted.
+      const bool channel_nlos = e.p_chan > default_nlos_;
+      const bool in_gate = e.z <= innov_gate_sigma_;
+      const bool admit_all = starved || los_share_ < drift_frac_;
+      d.use = std::isfinite(ctx.innovation_m) && !channel_nlos && (in_gate || admit_all);
+      if (d.use) {
+        const float factor = residual_inflation_factor(e.z, resid_th_, resid_beta_);
+        d.r_scale = std::isfinite(factor) ? std::fmax(factor, escape_r_scale_) : escape_r_scale_;
+        ++slot.stats.escape_count;
+        if (in_gate) last_pass_t_us_ = ctx.range.t_us;
+      }
+    } else if (!d.nlos) {
+      last_pass_t_us_ = ctx.range.t_us;
     }
   }
   return d;

@@ -133,10 +133,12 @@ class GatingLayer {
   float innov_z0_ = 3.0F;
   float verify_frac_ = 0.35F;
   float drift_frac_ = 0.15F;
+  uint64_t warmup_us_ = 3000000;
 
   // Escape state (default policy).
-  uint64_t last_los_t_us_ = 0;     // last range classified LOS while the filter was ready
+  uint64_t last_pass_t_us_ = 0;    // last range that passed the gate while the filter was ready
   bool seen_ready_ = false;         // the filter has been ready since the last reset
+  uint64_t first_ready_t_us_ = 0;   // when it first was
   bool escape_active_ = false;      // robust mode (warm-up or escape)
   uint32_t escape_entries_ = 0;
   float los_share_ = 0.0F;          // EMA of (|innovation| < resid_th sigma_uwb) while ready

@@ -222,7 +222,7 @@ void Console::run_streams() {
       case StreamKind::kPos:
         begin_async("$pos");
         add_pos_fields();
-        end_line(kReplyReserve);
+        end_async();
         break;
       case StreamKind::kStats: {
         const AppStats& s = app_.stats();
@@ -236,7 +236,7 @@ void Console::run_streams() {
             static_cast<unsigned long long>(s.loop.cycles), static_cast<unsigned long long>(s.loop.overruns),
             static_cast<unsigned long>(s.loop.cycle_max_us), static_cast<unsigned long>(c.tx_ok),
             static_cast<unsigned long>(c.tx_dropped), static_cast<unsigned long long>(stats_.dropped_bytes));
-        end_line(kReplyReserve);
+        end_async();
         break;
       }
       case StreamKind::kAnchors:
@@ -337,26 +337,36 @@ void Console::prompt() {
 // Streams and logs are asynchronous: with echo on, each first erases the
 // prompt line (and what is typed on it), which is then drawn again once.
 void Console::begin_async(const char* tag) {
-  begin(echo_ && prompt_visible_ ? "\r\x1b[K" : "");
+  async_erase_ = echo_ && prompt_visible_;
+  begin(async_erase_ ? "\r\x1b[K" : "");
   add("%s", tag);
-  if (echo_ && prompt_visible_) redraw_ = true;
+}
+
+void Console::end_async() {
+  out_[out_len_++] = '\r';
+  out_[out_len_++] = '\n';
+  if (queue(out_, out_len_, kReplyReserve) && async_erase_) {
+    redraw_ = true;
+    prompt_visible_ = false;
+  }
+  out_len_ = 0;
 }
 
 void Console::redraw_prompt() {
   if (!redraw_) return;
   redraw_ = false;
   if (!echo_ || job_ != Job::kNone) return;
-  queue_raw(LineEditor::kPrompt, std::strlen(LineEditor::kPrompt));
+  prompt();
   if (editor_.pending_len() > 0) queue_raw(editor_.pending(), editor_.pending_len());
 }
 
 void Console::log_line(LogLevel level, const char* text, size_t len) {
   static constexpr char kErase[] = "\r\x1b[K";
   size_t n = 0;
-  if (echo_ && prompt_visible_) {
+  const bool erase = echo_ && prompt_visible_;
+  if (erase) {
     std::memcpy(out_log_, kErase, sizeof kErase - 1);
     n = sizeof kErase - 1;
-    redraw_ = true;
   }
   if (len > kOutLineMax - 2 - n) len = kOutLineMax - 2 - n;
   std::memcpy(out_log_ + n, text, len);
@@ -365,7 +375,10 @@ void Console::log_line(LogLevel level, const char* text, size_t len) {
   out_log_[len++] = '\n';
   // Errors and warnings may use the reply reserve; info and debug leave it free.
   const bool urgent = level == LogLevel::kError || level == LogLevel::kWarn;
-  (void)queue(out_log_, len, urgent ? 0 : kReplyReserve);
+  if (queue(out_log_, len, urgent ? 0 : kReplyReserve) && erase) {
+    redraw_ = true;
+    prompt_visible_ = false;
+  }
 }
 
 }  // namespace uwbnav

@@ -121,6 +121,7 @@ class Console final : public LogSink {
   void queue_raw(const char* text, size_t len);
   void prompt();
   void begin_async(const char* tag);
+  void end_async();
   void redraw_prompt();
 
   // Commands (console_commands.cpp).
@@ -156,6 +157,7 @@ class Console final : public LogSink {
   bool banner_done_ = false;
   bool prompt_visible_ = false;  // the last thing shown is the prompt (and the line being typed)
   bool redraw_ = false;          // an async line erased the prompt: draw it again
+  bool async_erase_ = false;     // the async line being built starts by erasing the prompt line
   uint64_t now_us_ = 0;
 
   uint8_t rx_buf_[kRxBytesPerPoll] = {};  // read from the port, not yet fed to the editor

@@ -280,7 +280,7 @@ void Console::stream_anchor_lines() {
     add(" t_us=%llu id=%u state=%s range_m=%.3f innov_m=%.3f p_nlos=%.3f los=%lu nlos=%lu used=%lu", ull(now_us_),
         static_cast<unsigned>(a.anchor_id), a.nlos_state ? "nlos" : "los", d(a.last_range_m),
         d(a.last_innovation_m), d(a.last_p_nlos), ul(a.los_count), ul(a.nlos_count), ul(a.used_count));
-    end_line(kReplyReserve);
+    end_async();
   }
 }
 

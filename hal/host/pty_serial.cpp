@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 
@@ -15,7 +16,7 @@ PtySerialPort::~PtySerialPort() {
   if (master_fd_ >= 0) ::close(master_fd_);
 }
 
-Status PtySerialPort::open(std::string* error) {
+Status PtySerialPort::open(std::string* error, std::FILE* announce) {
   auto fail = [&](const char* what) {
     if (error != nullptr) *error = std::string(what) + ": " + std::strerror(errno);
     if (master_fd_ >= 0) ::close(master_fd_);
@@ -36,6 +37,10 @@ Status PtySerialPort::open(std::string* error) {
   cfmakeraw(&tio);
   if (tcsetattr(master_fd_, TCSANOW, &tio) != 0) return fail("tcsetattr");
   slave_name_ = name;
+  if (announce != nullptr) {
+    std::fprintf(announce, "console on %s (attach: screen %s)\n", name, name);
+    std::fflush(announce);
+  }
   return Status::kOk;
 }
 

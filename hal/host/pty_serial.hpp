@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <string>
 
 #include "hal/hal.hpp"
@@ -20,8 +21,9 @@ class PtySerialPort final : public SerialPort {
   PtySerialPort& operator=(const PtySerialPort&) = delete;
 
   // posix_openpt + grantpt + unlockpt, raw mode, O_NONBLOCK. `error` gets a
-  // one-line reason on failure.
-  [[nodiscard]] Status open(std::string* error);
+  // one-line reason on failure. With `announce`, prints
+  // "console on /dev/pts/N (attach: screen /dev/pts/N)" there once open.
+  [[nodiscard]] Status open(std::string* error, std::FILE* announce = nullptr);
   bool is_open() const { return master_fd_ >= 0; }
   // "/dev/pts/N" once open.
   const std::string& slave_name() const { return slave_name_; }

@@ -9,7 +9,8 @@
              inside library code it calls.
              Run after every link of the image (hal/mps2/CMakeLists.txt).
   footprint  Prints the footprint figures as JSON (flash/RAM per section, the
-             largest RAM objects, the worst-case stack, soft-double use) for
+             largest RAM objects, the worst-case stack, soft-double use and,
+             with --profile, the flat profile of the profile image) for
              scripts/footprint.sh.
 
 Method (docs/footprint.md): the call graph comes from the disassembly of the
@@ -464,6 +465,74 @@ def soft_double_hot_path(img, estimator_lib):
     return sorted(set(found))
 
 
+def component(img, name):
+    """Coarse owner of a function for the profile: where the instructions go."""
+    owner = img.owner(name)
+    if img.is_soft_double(name):
+        return "soft-double helpers and double libm (libgcc, picolibc)"
+    if "libuwbnav_estimator" in owner:
+        return "estimator (estimator/)"
+    if "libuwbnav_firmware" in owner:
+        return "firmware (firmware/: App, validation, CAN, console)"
+    if "hal/mps2" in owner:
+        return "MPS2 board and harness (hal/mps2/)"
+    if "libm_" in owner:
+        return "float libm (picolibc)"
+    if "libgcc" in owner:
+        return "libgcc integer/float helpers"
+    return "picolibc (string, stdio, other)"
+
+
+def path_component(path):
+    """Coarse owner of an input file for the flash breakdown."""
+    for key, label in (("libuwbnav_estimator", "estimator (estimator/)"),
+                       ("libuwbnav_firmware", "firmware (firmware/)"),
+                       ("hal/mps2", "MPS2 board and harness (hal/mps2/)"),
+                       ("libm_", "picolibc libm"),
+                       ("tinystdio", "picolibc stdio (snprintf/strtof)"),
+                       ("libgcc", "libgcc (soft-double, 64-bit integer helpers)"),
+                       ("libstdc++", "libstdc++/libsupc++"),
+                       ("libsupc++", "libstdc++/libsupc++")):
+        if key in path:
+            return label
+    return "picolibc (other)"
+
+
+def flash_breakdown(img):
+    replay = next((start for name, start, _ in img.sections if name == ".replay_data"), RAM_BASE)
+    out = {}
+    for start, end, path in img.owner_ranges:
+        if start < replay:
+            c = path_component(path)
+            out[c] = out.get(c, 0) + end - start
+    return sorted(out.items(), key=lambda kv: -kv[1])
+
+
+def profile(img, digest_path):
+    """Flat profile from the profile image's sampled PCs: per function and per component."""
+    starts = sorted((addr, size, min(names)) for addr, names in img.aliases.items()
+                    for size in [max(img.functions[n][1] for n in names)])
+    keys = [s[0] for s in starts]
+    per_fn, total, period = {}, 0, 0
+    with open(digest_path) as f:
+        for line in f:
+            if line.startswith("profile samples="):
+                period = int(line.split("period_ticks=")[1])
+            elif line.startswith("profile pc="):
+                pc, n = (int(x.split("=")[1]) for x in line.split()[1:3])
+                pc &= ~1
+                i = bisect.bisect_right(keys, pc) - 1
+                name = starts[i][2] if i >= 0 and pc < starts[i][0] + max(starts[i][1], 2) else "(unknown)"
+                per_fn[name] = per_fn.get(name, 0) + n
+                total += n
+    comps = {}
+    for name, n in per_fn.items():
+        c = component(img, name) if name in img.functions else "(unknown)"
+        comps[c] = comps.get(c, 0) + n
+    top = sorted(per_fn.items(), key=lambda kv: -kv[1])[:20]
+    return total, period, top, sorted(comps.items(), key=lambda kv: -kv[1])
+
+
 def sections(elf, size_tool):
     out = {}
     for line in run([size_tool, "-A", elf]).splitlines():
@@ -504,6 +573,7 @@ def footprint(img, args):
         "sections": sec,
         "flash_firmware_bytes": flash,
         "flash_replay_data_bytes": sec.get(".replay_data", 0),
+        "flash_by_component": flash_breakdown(img),
         "ram_static_bytes": ram_static,
         "stack_reserved_bytes": sec.get(".stack", 0),
         "stack_worst_bytes": depth + EXCEPTION_FRAME_BYTES + fault_depth,
@@ -525,6 +595,13 @@ def footprint(img, args):
         "soft_double_estimator_other": [(pretty.get(n, n), c) for n, c in soft_cold],
         "soft_double_firmware_hot": [(pretty.get(n, n), c) for n, c in soft_fw_hot],
     }
+    if args.profile:
+        total, period, top, comps = profile(img, args.profile)
+        pretty.update(demangle(sorted(n for n, _ in top), args.cxxfilt))
+        result["profile_samples"] = total
+        result["profile_period_ticks"] = period
+        result["profile_functions"] = [(pretty.get(n, n), c, os.path.basename(img.owner(n))) for n, c in top]
+        result["profile_components"] = comps
     json.dump(result, sys.stdout, indent=1)
     sys.stdout.write("\n")
     return 0
@@ -541,6 +618,7 @@ def main():
     p.add_argument("--objdump", default="arm-none-eabi-objdump")
     p.add_argument("--size", default="arm-none-eabi-size")
     p.add_argument("--cxxfilt", default="arm-none-eabi-c++filt")
+    p.add_argument("--profile", help="footprint: digest of the profile image (sampled PCs)")
     args = p.parse_args()
     img = Image(args)
     return check(img, args) if args.command == "check" else footprint(img, args)

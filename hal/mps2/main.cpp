@@ -2,15 +2,21 @@
 // the recording in flash through App::tick() on the 10 ms grid exactly as the
 // host lockstep replay does (tools/eval/replay.cpp), measures each cycle with
 // the SysTick counter, prints a digest over semihosting (format in
-// docs/footprint.md) and exits 0 (1: init failed, 2: stack overflow).
+// docs/footprint.md) and exits 0 (1: init failed, 2: stack overflow). The
+// profile build (UWBNAV_MPS2_PROFILE) prints a sampled PC histogram instead of
+// the per-cycle cost.
 #include <cstdint>
 
 #include "estimator/navigator.hpp"
 #include "estimator/nlos/gating_layer.hpp"
 #include "firmware/app.hpp"
+#include "firmware/console/console.hpp"
 #include "hal/mps2/board.hpp"
 #include "hal/mps2/flash_recording.hpp"
 #include "hal/mps2/text_out.hpp"
+#ifdef UWBNAV_MPS2_PROFILE
+#include "hal/mps2/profile.hpp"
+#endif
 
 namespace uwbnav::mps2 {
 namespace {
@@ -89,7 +95,7 @@ uint64_t first_sensor_time_us(const FlashRecording& rec) {
 }
 
 // ticks * instructions / calibration ticks, rounded (instructions under -icount).
-uint64_t to_instructions(uint64_t ticks, uint32_t calibration_ticks) {
+[[maybe_unused]] uint64_t to_instructions(uint64_t ticks, uint32_t calibration_ticks) {
   if (calibration_ticks == 0) return 0;
   return (ticks * kCalibrationInstructions + calibration_ticks / 2) / calibration_ticks;
 }
@@ -99,9 +105,32 @@ void print_vec(const char* key, const Vec3f& v) {
   g_out.str(" bits=").bits(v.x).str(",").bits(v.y).str(",").bits(v.z).endl();
 }
 
+// Per-cycle cost table of the digest (instructions under -icount shift=0).
+[[maybe_unused]] void print_cost(uint32_t calibration_ticks, uint64_t cycles) {
+  g_out.str("cost calibration_instructions=").u64(kCalibrationInstructions);
+  g_out.str(" calibration_ticks=").u64(calibration_ticks).endl();
+  uint64_t total_ticks = 0;
+  uint32_t max_ticks = 0;
+  for (uint32_t b = 0; b < kCostBins; ++b) {
+    const CostBin& bin = g_cost[b];
+    total_ticks += bin.ticks_sum;
+    if (bin.ticks_max > max_ticks) max_ticks = bin.ticks_max;
+    if (bin.cycles == 0) continue;
+    g_out.str("cost ranges=").u64(b).str(b + 1 == kCostBins ? "+" : "").str(" cycles=").u64(bin.cycles);
+    g_out.str(" mean_instructions=").u64(to_instructions(bin.ticks_sum, calibration_ticks) / bin.cycles);
+    g_out.str(" max_instructions=").u64(to_instructions(bin.ticks_max, calibration_ticks)).endl();
+  }
+  g_out.str("cost all cycles=").u64(cycles);
+  g_out.str(" mean_instructions=").u64(cycles ? to_instructions(total_ticks, calibration_ticks) / cycles : 0);
+  g_out.str(" max_instructions=").u64(to_instructions(max_ticks, calibration_ticks)).endl();
+}
+
 int run() {
   CycleCounter::start();
   const uint32_t calibration_ticks = calibrate_ticks(kCalibrationInstructions);
+#ifdef UWBNAV_MPS2_PROFILE
+  profile_start();
+#endif
 
   g_out.str("uwbnav-mps2 digest v1").endl();
   g_out.str("recording name=").str(kFlashRecording.name).str(" imu=").u64(kFlashRecording.num_imu);
@@ -140,6 +169,9 @@ int run() {
     t += kCyclePeriodUs;
   }
 
+#ifdef UWBNAV_MPS2_PROFILE
+  profile_report(g_out);
+#endif
   const AppStats& st = g_app.stats();
   const NavDiagnostics& diag = g_app.navigator().diagnostics();
   const NavOutput& last = g_observer.last_;
@@ -163,26 +195,16 @@ int run() {
   print_vec("final vel_mps=", last.vel_nav_mps);
   print_vec("final sigma_m=", last.pos_sigma_m);
 
+#ifdef UWBNAV_MPS2_PROFILE
+  // SysTick ran at the sampling period: per-cycle costs are not measured in this build.
   g_out.str("cost calibration_instructions=").u64(kCalibrationInstructions);
   g_out.str(" calibration_ticks=").u64(calibration_ticks).endl();
-  uint64_t total_ticks = 0;
-  uint32_t max_ticks = 0;
-  for (uint32_t b = 0; b < kCostBins; ++b) {
-    const CostBin& bin = g_cost[b];
-    total_ticks += bin.ticks_sum;
-    if (bin.ticks_max > max_ticks) max_ticks = bin.ticks_max;
-    if (bin.cycles == 0) continue;
-    g_out.str("cost ranges=").u64(b).str(b + 1 == kCostBins ? "+" : "").str(" cycles=").u64(bin.cycles);
-    g_out.str(" mean_instructions=").u64(to_instructions(bin.ticks_sum, calibration_ticks) / bin.cycles);
-    g_out.str(" max_instructions=").u64(to_instructions(bin.ticks_max, calibration_ticks)).endl();
-  }
-  g_out.str("cost all cycles=").u64(cycles);
-  g_out.str(" mean_instructions=").u64(cycles ? to_instructions(total_ticks, calibration_ticks) / cycles : 0);
-  g_out.str(" max_instructions=").u64(to_instructions(max_ticks, calibration_ticks)).endl();
-
+#else
+  print_cost(calibration_ticks, cycles);
+#endif
   const uint32_t stack_used = stack_used_bytes();
   g_out.str("memory sizeof_app=").u64(sizeof(App)).str(" sizeof_navigator=").u64(sizeof(Navigator));
-  g_out.str(" sizeof_gating_layer=").u64(sizeof(GatingLayer)).endl();
+  g_out.str(" sizeof_gating_layer=").u64(sizeof(GatingLayer)).str(" sizeof_console=").u64(sizeof(Console)).endl();
   g_out.str("stack used_bytes=").u64(stack_used).str(" reserved_bytes=").u64(stack_size_bytes()).endl();
   if (stack_used >= stack_size_bytes()) {
     g_out.str("error: stack overflow (paint at the stack bottom overwritten)").endl();

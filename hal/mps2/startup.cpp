@@ -32,6 +32,8 @@ int main();
 [[noreturn]] void Reset_Handler();
 [[noreturn]] void Fault_Handler();
 [[noreturn]] void Unexpected_Handler();
+// The profile build (hal/mps2/profile.cpp) provides its own.
+[[noreturn]] void SysTick_Handler() __attribute__((weak, alias("Unexpected_Handler")));
 
 // Static objects are never destroyed (the firmware never returns from main):
 // destructor registration (Arm EABI __aeabi_atexit) is accepted and dropped,
@@ -75,7 +77,7 @@ __attribute__((section(".vectors"), used)) const VectorTable kVectors = {
         Unexpected_Handler,  // DebugMonitor
         nullptr,
         Unexpected_Handler,  // PendSV
-        Unexpected_Handler,  // SysTick (counter runs without its interrupt)
+        SysTick_Handler,     // SysTick: counter runs without its interrupt, except in the profile build
     },
 };
 

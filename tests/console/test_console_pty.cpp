@@ -138,8 +138,15 @@ TEST(ConsolePty, PersonAtATerminalQueriesTheFirmwareAndChangesLiveBehaviourWithP
   const dataset::Recording& rec = testing::sim_recording(11);
   hal::PtySerialPort port;
   std::string err;
-  ASSERT_TRUE(ok(port.open(&err))) << err;
+  std::FILE* announce = std::tmpfile();
+  ASSERT_NE(announce, nullptr);
+  ASSERT_TRUE(ok(port.open(&err, announce))) << err;
   ASSERT_EQ(port.slave_name().rfind("/dev/pts/", 0), 0U) << port.slave_name();
+  char printed[256] = {};
+  std::rewind(announce);
+  ASSERT_NE(std::fgets(printed, sizeof printed, announce), nullptr);
+  std::fclose(announce);
+  EXPECT_EQ(std::string(printed), "console on " + port.slave_name() + " (attach: screen " + port.slave_name() + ")\n");
   const std::string store_path = (std::filesystem::temp_directory_path() / "uwbnav_console_pty_params.bin").string();
   std::filesystem::remove(store_path);
   hal::FileParamStore store(store_path);

@@ -70,9 +70,13 @@ TEST(EkfCore, LevelVehicleAtRestStaysPut) {
   EXPECT_LT(static_cast<double>((ekf.state().pos_nav_m - x.pos_nav_m).norm()), 1e-3);
   EXPECT_LT(static_cast<double>(ekf.state().vel_nav_mps.norm()), 1e-4);
   EXPECT_NEAR(static_cast<double>(quat_yaw(ekf.state().q_nav_body)), 0.7, 1e-5);
-  // Covariance grows (coasting) and stays symmetric.
+  // Covariance grows (coasting) and is exactly symmetric after sanitise().
   EXPECT_GT(ekf.cov()(0, 0), Real(0.01));
-  EXPECT_LT(static_cast<double>((ekf.cov() - ekf.cov().transpose()).cwiseAbs().maxCoeff()), 1e-9);
+  ASSERT_TRUE(ekf.sanitise());
+  EXPECT_EQ(static_cast<double>((ekf.cov() - ekf.cov().transpose()).cwiseAbs().maxCoeff()), 0.0);
+  const Eigen::SelfAdjointEigenSolver<ErrCov> es(ekf.cov(), Eigen::EigenvaluesOnly);
+  // Positive semi-definite up to the precision's rounding relative to the largest eigenvalue.
+  EXPECT_GT(es.eigenvalues()(0), -Real(1e-5) * es.eigenvalues()(kN - 1));
 }
 
 TEST(EkfCore, ConstantRateRotationIntegratesExactly) {

@@ -150,6 +150,7 @@ TEST(GatingLayer, DefaultHysteresisHoldsAnchorUntilConsecutiveLos) {
   GatingLayer g;
   Params p = params_with(GatingPolicy::kDefault);
   ASSERT_TRUE(ok(p.set(ParamId::kGateHystN, 2.0F)));
+  ASSERT_TRUE(ok(p.set(ParamId::kGateEscapeS, 0.0F)));  // robust mode off: gating only
   ASSERT_TRUE(ok(g.configure(make_site(), p)));
   EXPECT_TRUE(g.assess(ctx_at(0, 0, 20.0F, 0.0F)).use);
   const GatingDecision bad = g.assess(ctx_at(0, 80000, 21.5F, 1.5F));
@@ -169,49 +170,72 @@ TEST(GatingLayer, DefaultHysteresisHoldsAnchorUntilConsecutiveLos) {
   EXPECT_EQ(st.held_count, 1U);
 }
 
-TEST(GatingLayer, DefaultEscapeReadmitsAfterSustainedRejection) {
-  GatingLayer g;
-  Params p = params_with(GatingPolicy::kDefault);
-  ASSERT_TRUE(ok(p.set(ParamId::kGateEscapeS, 1.0F)));
-  ASSERT_TRUE(ok(g.configure(make_site(), p)));
-  // The filter has drifted 3 m: every innovation is -3 m (20 sigma) although the
-  // ranges themselves are steady (LOS by range rate and consistency).
-  uint64_t t = 0;
-  bool escaped = false;
-  for (int k = 0; k < 100 && !escaped; ++k) {
-    const int a = k % 4;
-    RangeContext c = ctx_at(a, t, 20.0F, -3.0F);
+// Feeds `n` ranges round-robin over the four anchors, 20 ms apart, all with the given
+// innovation; returns how many were admitted and the smallest R scale among them.
+struct Fed {
+  int used = 0;
+  float min_r_scale = 1e9F;
+};
+Fed feed(GatingLayer& g, uint64_t& t, int n, float innovation_m) {
+  Fed f;
+  for (int k = 0; k < n; ++k) {
+    RangeContext c = ctx_at(k % 4, t, 20.0F + innovation_m, innovation_m);
     const GatingDecision d = g.assess(c);
+    g.on_result(c, d, d.use);
     if (d.use) {
-      EXPECT_GT(d.r_scale, 1.0F);  // admitted only with inflated R
-      EXPECT_GE(t, 1000000U);
-      g.on_result(c, d, true);
-      escaped = true;
-    } else {
-      g.on_result(c, d, false);
+      ++f.used;
+      f.min_r_scale = std::fmin(f.min_r_scale, d.r_scale);
     }
     t += 20000;
   }
-  EXPECT_TRUE(escaped);
+  return f;
+}
+
+TEST(GatingLayer, DefaultStartsInRobustModeUntilFilterAgreesWithRanges) {
+  GatingLayer g;
+  ASSERT_TRUE(ok(g.configure(make_site(), params_with(GatingPolicy::kDefault))));
+  uint64_t t = 0;
+  // The first converged filter is unverified: a 1 m innovation (7 sigma) is fused, inflated.
+  const Fed warm = feed(g, t, 4, 1.0F);
   EXPECT_TRUE(g.escape_active());
+  EXPECT_EQ(warm.used, 4);
+  EXPECT_GE(warm.min_r_scale, 4.0F);
+  // Consistent ranges verify the filter; afterwards the same 1 m innovation is rejected.
+  feed(g, t, 80, 0.02F);
+  EXPECT_FALSE(g.escape_active());
+  const GatingDecision d = g.assess(ctx_at(0, t, 21.0F, 1.0F));
+  EXPECT_TRUE(d.nlos);
+  EXPECT_FALSE(d.use);
   EXPECT_EQ(g.escape_entries(), 1U);
-  // The filter recovered: anchor 1 (in NLOS state after the rejections) passes the gate
-  // again; its first LOS range is still held by the hysteresis (admitted by the escape),
-  // the second is fused normally without inflation, which ends the escape.
-  for (int k = 0; k < 2; ++k) {
-    RangeContext c = ctx_at(1, t, 20.0F, 0.01F);
-    const GatingDecision d = g.assess(c);
-    ASSERT_TRUE(d.use);
-    EXPECT_FLOAT_EQ(d.r_scale, k == 0 ? 100.0F : 1.0F);
-    g.on_result(c, d, true);
-    t += 20000;
-  }
+}
+
+TEST(GatingLayer, DefaultEscapeReadmitsDriftedFilter) {
+  GatingLayer g;
+  ASSERT_TRUE(ok(g.configure(make_site(), params_with(GatingPolicy::kDefault))));
+  uint64_t t = 0;
+  feed(g, t, 80, 0.02F);
+  ASSERT_FALSE(g.escape_active());
+  // The filter drifts 3 m: every innovation is -3 m (20 sigma) although the ranges are steady.
+  // First rejected, then after escape_s (0.5 s = 25 ranges) without any LOS range the
+  // robust mode admits them with inflated R instead of locking the filter out for good.
+  const Fed locked = feed(g, t, 20, -3.0F);
+  EXPECT_EQ(locked.used, 0);
+  const Fed escaped = feed(g, t, 20, -3.0F);
+  EXPECT_GT(escaped.used, 10);
+  EXPECT_GE(escaped.min_r_scale, 4.0F);
+  EXPECT_TRUE(g.escape_active());
+  EXPECT_EQ(g.escape_entries(), 2U);
+  EXPECT_GT(g.anchor_stats(0).escape_count, 0U);
+  // Recovered: consistent ranges end the robust mode.
+  feed(g, t, 80, 0.02F);
   EXPECT_FALSE(g.escape_active());
 }
 
 TEST(GatingLayer, DefaultRejectsGrossOutlierDespiteLosEvidence) {
   GatingLayer g;
-  ASSERT_TRUE(ok(g.configure(make_site(), params_with(GatingPolicy::kDefault))));
+  Params p = params_with(GatingPolicy::kDefault);
+  ASSERT_TRUE(ok(p.set(ParamId::kGateEscapeS, 0.0F)));  // robust mode off: gating only
+  ASSERT_TRUE(ok(g.configure(make_site(), p)));
   EXPECT_TRUE(g.assess(ctx_at(0, 0, 20.0F, 0.0F)).use);
   EXPECT_FALSE(g.assess(ctx_at(1, 20000, 20.0F, -20.0F)).use);  // first range of anchor 1: no Δρ
 }

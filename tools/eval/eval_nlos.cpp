@@ -110,28 +110,28 @@ std::string meters(double v) {
 
 void print_confusion_row(const std::string& name, const Confusion& c) {
   if (c.n() == 0) {
-    std::printf("| %-30s | %9s | %9s | %9s | %7s |\n", name.c_str(), "n/a", "n/a", "n/a", "0");
+    std::printf("| %-38s | %9s | %9s | %9s | %7s |\n", name.c_str(), "n/a", "n/a", "n/a", "0");
     return;
   }
-  std::printf("| %-30s | %9s | %9s | %9s | %7zu |\n", name.c_str(), pct(c.precision()).c_str(),
+  std::printf("| %-38s | %9s | %9s | %9s | %7zu |\n", name.c_str(), pct(c.precision()).c_str(),
               pct(c.recall()).c_str(), pct(c.accuracy()).c_str(), c.n());
 }
 
 void print_confusion_header() {
-  std::printf("| %-30s | %9s | %9s | %9s | %7s |\n", "method", "precision", "recall", "accuracy", "ranges");
-  std::printf("|%s|%s|%s|%s|%s|\n", std::string(32, '-').c_str(), std::string(11, '-').c_str(),
+  std::printf("| %-38s | %9s | %9s | %9s | %7s |\n", "method", "precision", "recall", "accuracy", "ranges");
+  std::printf("|%s|%s|%s|%s|%s|\n", std::string(40, '-').c_str(), std::string(11, '-').c_str(),
               std::string(11, '-').c_str(), std::string(11, '-').c_str(), std::string(9, '-').c_str());
 }
 
 void print_position_header() {
-  std::printf("| %-30s | %8s | %8s | %8s | %8s |\n", "method", "RMSE [m]", "MAX [m]", "STD [m]", "epochs");
-  std::printf("|%s|%s|%s|%s|%s|\n", std::string(32, '-').c_str(), std::string(10, '-').c_str(),
+  std::printf("| %-38s | %8s | %8s | %8s | %8s |\n", "method", "RMSE [m]", "MAX [m]", "STD [m]", "epochs");
+  std::printf("|%s|%s|%s|%s|%s|\n", std::string(40, '-').c_str(), std::string(10, '-').c_str(),
               std::string(10, '-').c_str(), std::string(10, '-').c_str(), std::string(10, '-').c_str());
 }
 
 void print_position_row(const std::string& name, const std::vector<ErrorSample>& errors, size_t epochs_total) {
   const AccuracyStats a = accuracy(errors, epochs_total);
-  std::printf("| %-30s | %8s | %8s | %8s | %8zu |\n", name.c_str(), meters(a.rmse_h_m).c_str(),
+  std::printf("| %-38s | %8s | %8s | %8s | %8zu |\n", name.c_str(), meters(a.rmse_h_m).c_str(),
               meters(a.max_h_m).c_str(), meters(a.std_h_m).c_str(), a.epochs);
 }
 
@@ -177,7 +177,7 @@ bool evaluate_recording(const dataset::Recording& rec, const std::vector<size_t>
     acc.confusion.resize(methods.size());
     acc.errors.resize(methods.size());
   }
-  for (size_t i : subset) {
+  for (size_t i : subset.empty() ? labelled(rec) : subset) {
     ++acc.ranges;
     if (rec.uwb[i].nlos_label > 0) ++acc.nlos_ranges;
   }
@@ -191,18 +191,18 @@ bool evaluate_recording(const dataset::Recording& rec, const std::vector<size_t>
     }
     acc.confusion[m].add(c);
     acc.errors[m].insert(acc.errors[m].end(), err.begin(), err.end());
-    std::fprintf(stderr, "  %-30s acc %s\n", methods[m].name.c_str(), pct(c.accuracy()).c_str());
+    std::fprintf(stderr, "  %-38s acc %s\n", methods[m].name.c_str(), pct(c.accuracy()).c_str());
   }
-  acc.channel.add(channel_rule(rec, subset));
+  acc.channel.add(channel_rule(rec, subset.empty() ? labelled(rec) : subset));
   if (positioning && !rec.truth.empty()) {
     const std::vector<dataset::TruthRow> tt = tag_truth(rec);
     const auto lin = compare_with_truth(ls_baseline(rec, LsMethod::kLinear), tt);
     const auto tay = compare_with_truth(ls_baseline(rec, LsMethod::kTaylor), tt);
     acc.ls_linear.insert(acc.ls_linear.end(), lin.begin(), lin.end());
     acc.ls_taylor.insert(acc.ls_taylor.end(), tay.begin(), tay.end());
-    // IMU only: ranges for the first 15 s (initialisation), then dead reckoning.
+    // IMU only: ranges for the first 30 s (initialisation, convergence), then dead reckoning.
     dataset::Recording cut = rec;
-    const uint64_t t_cut = rec.uwb.empty() ? 0 : rec.uwb.front().range.t_us + 15000000U;
+    const uint64_t t_cut = rec.uwb.empty() ? 0 : rec.uwb.front().range.t_us + 30000000U;
     cut.uwb.erase(std::remove_if(cut.uwb.begin(), cut.uwb.end(),
                                  [t_cut](const dataset::UwbRow& r) { return r.range.t_us > t_cut; }),
                   cut.uwb.end());
@@ -232,7 +232,7 @@ void print_set(const char* title, const SetResult& r, bool positioning) {
   if (!positioning) return;
   std::printf("\nPositioning (seed 000 Table 3 form), horizontal error of the body origin (LS: tag antenna)\n\n");
   print_position_header();
-  print_position_row("IMU only (UWB cut after 15 s)", r.imu_only, r.epochs_total);
+  print_position_row("IMU only (UWB cut after 30 s)", r.imu_only, r.epochs_total);
   print_position_row("LS-UWB (linear LS)", r.ls_linear, r.epochs_total);
   print_position_row("LS-Taylor", r.ls_taylor, r.epochs_total);
   for (size_t m = 0; m < methods.size(); ++m) {

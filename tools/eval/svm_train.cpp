@@ -155,6 +155,145 @@ std::string format_float(float v) {
 
 }  // namespace
 
+namespace {
+
+// Largest stratified training subsample (at most max_train_samples) whose C-SVC model
+// for (c, g) has at most `capacity` support vectors; 0 when none is found.
+size_t feasible_size(const std::vector<SvmSample>& samples, const SvmTrainOptions& options, double c, double g) {
+  size_t n = std::min(samples.size(), options.max_train_samples);
+  for (int attempt = 0; attempt < 12 && n >= 20; ++attempt) {
+    const std::vector<SvmSample> train = stratified_subsample(samples, n, options.seed + 17U);
+    SvmModel scaling;
+    fit_scaling(train, options.set, scaling);
+    auto prob = make_problem(train, scaling);
+    const svm_parameter param = make_param(c, g, false);
+    svm_model* lm = svm_train(&prob->prob, &param);
+    const size_t nsv = static_cast<size_t>(svm_get_nr_sv(lm));
+    svm_free_and_destroy_model(&lm);
+    if (nsv <= options.capacity) return train.size();
+    n = static_cast<size_t>(0.9 * static_cast<double>(train.size()) * static_cast<double>(options.capacity) /
+                            static_cast<double>(nsv));
+  }
+  return 0;
+}
+
+// Wilson editing: keeps the samples whose label agrees with the majority of their k
+// nearest neighbours (scaled feature space). Removes the overlap of the classes so that
+// a capacity-limited SVM spends its support vectors on the decision boundary.
+std::vector<SvmSample> wilson_edit(const std::vector<SvmSample>& pool, SvmFeatureSet set, size_t k) {
+  SvmModel scaling;
+  fit_scaling(pool, set, scaling);
+  const size_t nf = scaling.num_features;
+  std::vector<double> x(pool.size() * nf);
+  for (size_t i = 0; i < pool.size(); ++i) svm_scale(scaling, pool[i].features, &x[i * nf]);
+  std::vector<SvmSample> kept;
+  std::vector<std::pair<double, int>> d(pool.size());
+  for (size_t i = 0; i < pool.size(); ++i) {
+    for (size_t j = 0; j < pool.size(); ++j) {
+      double s2 = 0.0;
+      for (size_t f = 0; f < nf; ++f) {
+        const double df = x[i * nf + f] - x[j * nf + f];
+        s2 += df * df;
+      }
+      d[j] = {i == j ? 1e300 : s2, pool[j].label};
+    }
+    std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(k), d.end());
+    size_t agree = 0;
+    for (size_t m = 0; m < k; ++m) agree += d[m].second == pool[i].label ? 1U : 0U;
+    if (2 * agree > k) kept.push_back(pool[i]);
+  }
+  return kept;
+}
+
+// Platt scaling fitted on decision values (Platt 1999 with the Newton/backtracking
+// method of Lin, Lin and Weng 2007): P(label0 | f) = 1 / (1 + exp(A f + B)).
+void fit_platt(const std::vector<double>& dec, const std::vector<int>& is_label0, double* a_out, double* b_out) {
+  double prior1 = 0.0;
+  double prior0 = 0.0;
+  for (int y : is_label0) (y != 0 ? prior1 : prior0) += 1.0;
+  const double hi = (prior1 + 1.0) / (prior1 + 2.0);
+  const double lo = 1.0 / (prior0 + 2.0);
+  std::vector<double> t(dec.size());
+  for (size_t i = 0; i < dec.size(); ++i) t[i] = is_label0[i] != 0 ? hi : lo;
+  auto objective = [&](double a, double b) {
+    double f = 0.0;
+    for (size_t i = 0; i < dec.size(); ++i) {
+      const double z = dec[i] * a + b;
+      f += z >= 0.0 ? t[i] * z + std::log1p(std::exp(-z)) : (t[i] - 1.0) * z + std::log1p(std::exp(z));
+    }
+    return f;
+  };
+  double a = 0.0;
+  double b = std::log((prior0 + 1.0) / (prior1 + 1.0));
+  double fval = objective(a, b);
+  for (int iter = 0; iter < 100; ++iter) {
+    double h11 = 1e-12, h22 = 1e-12, h21 = 0.0, g1 = 0.0, g2 = 0.0;
+    for (size_t i = 0; i < dec.size(); ++i) {
+      const double z = dec[i] * a + b;
+      double p = 0.0;
+      double q = 0.0;
+      if (z >= 0.0) {
+        p = std::exp(-z) / (1.0 + std::exp(-z));
+        q = 1.0 / (1.0 + std::exp(-z));
+      } else {
+        p = 1.0 / (1.0 + std::exp(z));
+        q = std::exp(z) / (1.0 + std::exp(z));
+      }
+      const double d2 = p * q;
+      h11 += dec[i] * dec[i] * d2;
+      h22 += d2;
+      h21 += dec[i] * d2;
+      const double d1 = t[i] - p;
+      g1 += dec[i] * d1;
+      g2 += d1;
+    }
+    if (std::fabs(g1) < 1e-5 && std::fabs(g2) < 1e-5) break;
+    const double det = h11 * h22 - h21 * h21;
+    const double da = -(h22 * g1 - h21 * g2) / det;
+    const double db = -(-h21 * g1 + h11 * g2) / det;
+    const double gd = g1 * da + g2 * db;
+    double step = 1.0;
+    bool moved = false;
+    while (step >= 1e-10) {
+      const double fa = a + step * da;
+      const double fb = b + step * db;
+      const double nf = objective(fa, fb);
+      if (nf < fval + 1e-4 * step * gd) {
+        a = fa;
+        b = fb;
+        fval = nf;
+        moved = true;
+        break;
+      }
+      step *= 0.5;
+    }
+    if (!moved) break;
+  }
+  *a_out = a;
+  *b_out = b;
+}
+
+// Accuracy of a libsvm model on samples (scaled with `scaling`); decision values out.
+double validate(const svm_model* lm, const SvmModel& scaling, const std::vector<SvmSample>& val,
+                std::vector<double>* dec_out) {
+  size_t correct = 0;
+  if (dec_out != nullptr) dec_out->assign(val.size(), 0.0);
+  for (size_t i = 0; i < val.size(); ++i) {
+    double x[kSvmMaxFeatures] = {};
+    svm_scale(scaling, val[i].features, x);
+    svm_node nodes[kSvmMaxFeatures + 1];
+    for (size_t f = 0; f < scaling.num_features; ++f) nodes[f] = svm_node{static_cast<int>(f + 1), x[f]};
+    nodes[scaling.num_features].index = -1;
+    double dec = 0.0;
+    const double label = svm_predict_values(lm, nodes, &dec);
+    if (dec_out != nullptr) (*dec_out)[i] = dec;
+    correct += (label > 0.5 ? 1 : 0) == val[i].label ? 1U : 0U;
+  }
+  return val.empty() ? 0.0 : static_cast<double>(correct) / static_cast<double>(val.size());
+}
+
+}  // namespace
+
 std::vector<SvmSample> stratified_subsample(const std::vector<SvmSample>& samples, size_t n, uint64_t seed) {
   if (samples.size() <= n) return samples;
   std::mt19937_64 rng(seed);
@@ -241,6 +380,82 @@ void cross_validate(const std::vector<SvmSample>& samples, SvmFeatureSet set, do
   }
 }
 
+namespace {
+
+// The edited recipe (options.edit_pool > 0): Wilson-edited training pool, (C, gamma)
+// chosen by accuracy on a disjoint unedited validation set under the capacity rule,
+// Platt parameters refitted on that validation set (the edited data would make
+// libsvm's internal Platt fit overconfident).
+Status train_edited(const std::vector<SvmSample>& samples, const SvmTrainOptions& options,
+                    const std::vector<double>& c_grid, const std::vector<double>& g_grid, SvmModel& model,
+                    SvmTrainReport& report, std::string* error) {
+  std::vector<size_t> order(samples.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::mt19937_64 rng(options.seed + 29U);
+  std::shuffle(order.begin(), order.end(), rng);
+  const size_t n_pool = std::min(options.edit_pool, samples.size() / 2);
+  const size_t n_val = std::min(options.validation_samples, samples.size() - n_pool);
+  std::vector<SvmSample> pool;
+  std::vector<SvmSample> val;
+  for (size_t i = 0; i < n_pool; ++i) pool.push_back(samples[order[i]]);
+  for (size_t i = n_pool; i < n_pool + n_val; ++i) val.push_back(samples[order[i]]);
+  const std::vector<SvmSample> edited = wilson_edit(pool, options.set, 15);
+  report.samples_edited = edited.size();
+  size_t best_n = 0;
+  for (double c : c_grid) {
+    for (double g : g_grid) {
+      const size_t n_fit = feasible_size(edited, options, c, g);
+      if (n_fit == 0) continue;
+      const std::vector<SvmSample> train = stratified_subsample(edited, n_fit, options.seed + 17U);
+      SvmModel scaling;
+      fit_scaling(train, options.set, scaling);
+      auto prob = make_problem(train, scaling);
+      const svm_parameter param = make_param(c, g, false);
+      svm_model* lm = svm_train(&prob->prob, &param);
+      SvmGridPoint gp{c, g, validate(lm, scaling, val, nullptr), n_fit};
+      svm_free_and_destroy_model(&lm);
+      report.grid.push_back(gp);
+      if (options.verbose) {
+        std::fprintf(stderr, "  C=%-8g gamma=%-8g n=%-5zu validation=%.4f\n", c, g, n_fit, gp.cv_accuracy);
+      }
+      if (gp.cv_accuracy > report.best_cv_accuracy + 1e-12) {
+        report.best_cv_accuracy = gp.cv_accuracy;
+        report.best_c = c;
+        report.best_gamma = g;
+        best_n = n_fit;
+      }
+    }
+  }
+  if (best_n == 0) {
+    if (error != nullptr) *error = "no grid point meets the support-vector capacity";
+    return Status::kFull;
+  }
+  const std::vector<SvmSample> train = stratified_subsample(edited, best_n, options.seed + 17U);
+  SvmModel scaling;
+  fit_scaling(train, options.set, scaling);
+  auto prob = make_problem(train, scaling);
+  const svm_parameter param = make_param(report.best_c, report.best_gamma, true);
+  std::srand(static_cast<unsigned>(options.seed));
+  svm_model* lm = svm_train(&prob->prob, &param);
+  report.num_sv = static_cast<size_t>(svm_get_nr_sv(lm));
+  report.samples_trained = train.size();
+  std::vector<double> dec;
+  validate(lm, scaling, val, &dec);
+  const bool fits = to_embedded(lm, scaling, options.capacity, model);
+  svm_free_and_destroy_model(&lm);
+  if (!fits) {
+    if (error != nullptr) *error = "cannot meet the support-vector capacity";
+    return Status::kFull;
+  }
+  std::vector<int> is_label0(val.size());
+  for (size_t i = 0; i < val.size(); ++i) is_label0[i] = (val[i].label != 0) == (model.first_label_nlos != 0) ? 1 : 0;
+  fit_platt(dec, is_label0, &model.prob_a, &model.prob_b);
+  model.crc32 = svm_model_crc32(model);
+  return Status::kOk;
+}
+
+}  // namespace
+
 Status train_svm_model(const std::vector<SvmSample>& samples, const SvmTrainOptions& options, SvmModel& model,
                        SvmTrainReport& report, std::string* error) {
   svm_set_print_string_function(quiet_print);
@@ -254,39 +469,60 @@ Status train_svm_model(const std::vector<SvmSample>& samples, const SvmTrainOpti
   }
   const std::vector<double> c_grid = options.c_grid.empty() ? default_grid(-1, 9, 2) : options.c_grid;
   const std::vector<double> g_grid = options.gamma_grid.empty() ? default_grid(-3, 5, 2) : options.gamma_grid;
+  if (options.edit_pool > 0) return train_edited(samples, options, c_grid, g_grid, model, report, error);
+  size_t best_n = 0;
 
-  // Grid search (seed 000: parameters by cross-validation).
-  const std::vector<SvmSample> grid_set = stratified_subsample(samples, options.grid_samples, options.seed);
-  SvmModel grid_scaling;
-  fit_scaling(grid_set, options.set, grid_scaling);
-  auto grid_prob = make_problem(grid_set, grid_scaling);
+  // Grid search (seed 000: parameters by k-fold cross-validation), capacity-aware: for each
+  // (C, gamma) the largest stratified training set whose model fits the capacity is found
+  // first, then the cross-validation runs on folds of that size, so the score is the score
+  // of a model the firmware can actually hold.
   for (double c : c_grid) {
     for (double g : g_grid) {
+      const size_t n_fit = feasible_size(samples, options, c, g);
+      if (n_fit == 0) continue;
+      const size_t n_cv = std::min(samples.size(), std::max(options.grid_samples,
+          static_cast<size_t>(static_cast<double>(n_fit) * options.folds / (options.folds - 1))));
+      const std::vector<SvmSample> cv_set = stratified_subsample(samples, n_cv, options.seed);
+      const std::vector<SvmSample> grid_set =
+          n_cv > n_fit * options.folds / (options.folds - 1) + 1
+              ? stratified_subsample(cv_set, n_fit * static_cast<size_t>(options.folds) /
+                                                 static_cast<size_t>(options.folds - 1), options.seed + 3U)
+              : cv_set;
       size_t correct = 0;
       if (options.grouped_cv) {
         std::vector<int> pred;
         cross_validate(grid_set, options.set, c, g, options.folds, true, false, options.seed, &pred, nullptr);
-        for (size_t i = 0; i < grid_set.size(); ++i) correct += pred[i] == grid_set[i].label ? 1U : 0U;
+        for (size_t k = 0; k < grid_set.size(); ++k) correct += pred[k] == grid_set[k].label ? 1U : 0U;
       } else {
+        SvmModel grid_scaling;
+        fit_scaling(grid_set, options.set, grid_scaling);
+        auto grid_prob = make_problem(grid_set, grid_scaling);
         const svm_parameter param = make_param(c, g, false);
         std::vector<double> target(grid_set.size(), 0.0);
         std::srand(static_cast<unsigned>(options.seed));
         svm_cross_validation(&grid_prob->prob, &param, options.folds, target.data());
-        for (size_t i = 0; i < grid_set.size(); ++i) correct += (target[i] > 0.5 ? 1 : 0) == grid_set[i].label ? 1U : 0U;
+        for (size_t k = 0; k < grid_set.size(); ++k) correct += (target[k] > 0.5 ? 1 : 0) == grid_set[k].label ? 1U : 0U;
       }
-      SvmGridPoint gp{c, g, static_cast<double>(correct) / static_cast<double>(grid_set.size())};
+      SvmGridPoint gp{c, g, static_cast<double>(correct) / static_cast<double>(grid_set.size()), n_fit};
       report.grid.push_back(gp);
-      if (options.verbose) std::fprintf(stderr, "  C=%-8g gamma=%-8g cv=%.4f\n", c, g, gp.cv_accuracy);
+      if (options.verbose) {
+        std::fprintf(stderr, "  C=%-8g gamma=%-8g n=%-5zu cv=%.4f\n", c, g, n_fit, gp.cv_accuracy);
+      }
       if (gp.cv_accuracy > report.best_cv_accuracy + 1e-12) {
         report.best_cv_accuracy = gp.cv_accuracy;
         report.best_c = c;
         report.best_gamma = g;
+        best_n = n_fit;
       }
     }
   }
+  if (best_n == 0) {
+    if (error != nullptr) *error = "no grid point meets the support-vector capacity";
+    return Status::kFull;
+  }
 
   // Final model under the support-vector capacity: shrink the training set until nSV fits.
-  size_t n_train = std::min(samples.size(), options.max_train_samples);
+  size_t n_train = best_n;
   for (int attempt = 0; attempt < 12; ++attempt) {
     const std::vector<SvmSample> train = stratified_subsample(samples, n_train, options.seed + 17U);
     SvmModel scaling;
@@ -320,9 +556,11 @@ std::string export_models_cpp(const std::vector<SvmModel>& models, const std::ve
     const SvmTrainReport& r = reports[m];
     char line[256];
     std::snprintf(line, sizeof(line),
-                  "// %s: %s, C=%g gamma=%g, grid CV accuracy %.4f, %zu of %zu samples trained, %zu SVs\n",
+                  "// %s: %s, C=%g gamma=%g, %s accuracy %.4f, %zu of %zu samples trained%s, %zu SVs\n",
                   names[m].c_str(), feature_set_name(static_cast<SvmFeatureSet>(models[m].feature_set)), r.best_c,
-                  r.best_gamma, r.best_cv_accuracy, r.samples_trained, r.samples_available, r.num_sv);
+                  r.best_gamma, r.samples_edited > 0 ? "validation" : "grid CV", r.best_cv_accuracy,
+                  r.samples_trained, r.samples_available, r.samples_edited > 0 ? " (Wilson-edited pool)" : "",
+                  r.num_sv);
     o << line;
   }
   o << "#include \"estimator/nlos/svm_model.hpp\"\n\nnamespace uwbnav {\n";
@@ -384,8 +622,10 @@ int usage() {
                "usage: uwbnav train-svm --features rr,rrs,channel\n"
                "         (--sim PRESET --seeds N[,N...] | --recording DIR | --table FILE.csv)...\n"
                "         [--out FILE.cpp] [--folds K] [--grouped] [--seed N] [--grid-samples N]\n"
-               "         [--max-train N] [--capacity N] [--max-dt-us N] [--verbose]\n"
-               "  rr: range rate (seed 000 SVM1); rrs: range rate + speed (SVM2); channel: rx-fp gap, fp power\n");
+               "         [--max-train N] [--capacity N] [--max-dt-us N] [--edit POOL] [--verbose]\n"
+               "  rr: range rate (seed 000 SVM1); rrs: range rate + speed (SVM2); channel: rx-fp gap, fp power\n"
+               "  --edit POOL: Wilson-edit a pool of POOL samples, select C/gamma and refit Platt on a\n"
+               "  disjoint validation set (docs/nlos.md); default: k-fold CV on the raw samples\n");
   return 2;
 }
 
@@ -438,6 +678,8 @@ int run_train_svm(int argc, char** argv) {
       base.max_train_samples = std::strtoull(v.c_str(), nullptr, 10);
     } else if (a == "--capacity") {
       base.capacity = std::min<size_t>(kSvmMaxSupportVectors, std::strtoull(v.c_str(), nullptr, 10));
+    } else if (a == "--edit") {
+      base.edit_pool = std::strtoull(v.c_str(), nullptr, 10);
     } else if (a == "--max-dt-us") {
       max_dt_us = std::strtoull(v.c_str(), nullptr, 10);
     } else {
@@ -506,8 +748,9 @@ int run_train_svm(int argc, char** argv) {
       std::fprintf(stderr, "uwbnav train-svm: %s: %s\n", feature_set_name(set), err.c_str());
       return 1;
     }
-    std::printf("%-17s C=%-6g gamma=%-6g cv_accuracy=%.2f%%  trained %zu/%zu samples  nSV=%zu (capacity %zu, %d retrains)  crc32=%08" PRIX32 "\n",
-                feature_set_name(set), report.best_c, report.best_gamma, 100.0 * report.best_cv_accuracy,
+    std::printf("%-17s C=%-6g gamma=%-6g %s=%.2f%%  trained %zu/%zu samples  nSV=%zu (capacity %zu, %d retrains)  crc32=%08" PRIX32 "\n",
+                feature_set_name(set), report.best_c, report.best_gamma,
+                opt.edit_pool > 0 ? "validation_accuracy" : "cv_accuracy", 100.0 * report.best_cv_accuracy,
                 report.samples_trained, report.samples_available, report.num_sv, opt.capacity,
                 report.capacity_retries, model.crc32);
     models.push_back(model);

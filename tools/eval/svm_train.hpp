@@ -20,24 +20,28 @@ struct SvmTrainOptions {
   bool grouped_cv = false;         // folds hold out whole groups (SvmSample::group)
   std::vector<double> c_grid;      // empty: 2^-1, 2^1, ..., 2^9
   std::vector<double> gamma_grid;  // empty: 2^-3, 2^-1, ..., 2^5
-  size_t grid_samples = 2000;      // stratified subsample used by the grid search
-  size_t max_train_samples = 4000; // largest final training set tried
+  size_t grid_samples = 2000;      // minimum cross-validation set of the grid search
+  size_t max_train_samples = 3000; // largest training set tried (per grid point and final)
   size_t capacity = kSvmMaxSupportVectors;  // nSV limit of the embedded evaluator
   uint64_t seed = 1;               // subsampling and libsvm's rand() (Platt CV, folds)
   bool verbose = false;            // grid progress on stderr
+  size_t edit_pool = 0;            // > 0: Wilson-edited recipe on a pool of this many samples
+  size_t validation_samples = 8000;  // edited recipe: unedited validation set size
 };
 
 struct SvmGridPoint {
   double c = 0.0;
   double gamma = 0.0;
   double cv_accuracy = 0.0;  // [0,1]
+  size_t train_size = 0;     // largest training set whose model fits the capacity
 };
 
 struct SvmTrainReport {
   std::vector<SvmGridPoint> grid;
   double best_c = 0.0;
   double best_gamma = 0.0;
-  double best_cv_accuracy = 0.0;  // of the grid search [0,1]
+  double best_cv_accuracy = 0.0;  // of the grid search [0,1] (validation accuracy when edited)
+  size_t samples_edited = 0;      // edited recipe: pool size after editing
   size_t samples_available = 0;
   size_t samples_trained = 0;     // final training set size (after the capacity rule)
   size_t num_sv = 0;
@@ -53,9 +57,13 @@ void cross_validate(const std::vector<SvmSample>& samples, SvmFeatureSet set, do
                     bool grouped, bool probability, uint64_t seed, std::vector<int>* predicted,
                     std::vector<double>* p_nlos);
 
-// Trains one model (grid search, then the capacity rule: the final training set is
-// a stratified subsample of at most max_train_samples; while nSV > capacity the
-// set shrinks to 0.9 * n * capacity / nSV and the model is retrained).
+// Trains one model under the support-vector capacity of the embedded evaluator.
+// Capacity rule: training sets are stratified subsamples of at most
+// max_train_samples; while a model has nSV > capacity its set shrinks to
+// 0.9 * n * capacity / nSV and it is retrained. The grid search applies the rule
+// per (C, gamma) and cross-validates on folds of the resulting size; the final
+// model (probability = 1) uses the winner's size. With edit_pool > 0 the edited
+// recipe is used instead (Wilson editing, validation-set selection, Platt refit).
 [[nodiscard]] Status train_svm_model(const std::vector<SvmSample>& samples, const SvmTrainOptions& options,
                                      SvmModel& model, SvmTrainReport& report, std::string* error);
 

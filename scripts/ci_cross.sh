@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# CI, cross-compilation part (issue 4), run by .ci/run after the host presets:
+#  1. Cortex-M4F image (hal/mps2) in build/host/cross-m4f, the tree the host
+#     ctest (cross_m4f_*) already built: full build including the rule check
+#     (no heap, no exceptions, no soft-double in the estimator hot path), then
+#     the footprint report docs/footprint.md (qemu-system-arm -icount).
+#  2. aarch64 preset: everything cross-compiled, unit and script tests run
+#     under qemu-aarch64 (CMAKE_CROSSCOMPILING_EMULATOR).
+# Every step runs; the script fails at the end if any step failed.
+set -uo pipefail
+cd "$(dirname "$0")/.."
+start=$(date +%s)
+failed=()
+step() {
+  local name="$1"
+  shift
+  echo "ci_cross: == $name"
+  local t0
+  t0=$(date +%s)
+  if "$@"; then
+    echo "ci_cross: $name ok ($(( $(date +%s) - t0 )) s)"
+  else
+    echo "ci_cross: $name FAILED ($(( $(date +%s) - t0 )) s)"
+    failed+=("$name")
+  fi
+}
+
+bash scripts/bootstrap.sh || exit 1
+if [[ ! -x build/host/bin/uwbnav ]]; then
+  cmake --preset host >/dev/null && cmake --build --preset host --target uwbnav || exit 1
+fi
+m4f=build/host/cross-m4f
+step "cortex-m4f image" cmake -DSOURCE="$PWD" -DBINARY="$PWD/$m4f" -DUWBNAV="$PWD/build/host/bin/uwbnav" \
+  -P hal/mps2/build_image.cmake
+step "cortex-m4f rule check" cmake --build "$m4f" --target uwbnav_mps2_check
+step "footprint report" bash scripts/footprint.sh "$m4f" docs/footprint.md
+step "aarch64 configure" cmake --preset aarch64
+step "aarch64 build" cmake --build --preset aarch64
+step "aarch64 tests (qemu-aarch64)" ctest --preset aarch64 -j2
+
+echo "ci_cross: done in $(( $(date +%s) - start )) s"
+if [[ ${#failed[@]} -gt 0 ]]; then
+  echo "ci_cross: failed: ${failed[*]}"
+  exit 1
+fi

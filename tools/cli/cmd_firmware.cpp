@@ -1,0 +1,334 @@
+// `uwbnav firmware`: the firmware as a real-time host process ("PC board"):
+// RealtimeClock + RealtimeLoop drive App::tick every 10 ms; sensors come from
+// a recording replayed in real time or from a HIL rig over CAN (docs/hil.md).
+#include <signal.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <memory>
+#include <string>
+
+#include "firmware/app.hpp"
+#include "firmware/realtime_loop.hpp"
+#include "hal/host/candump_log.hpp"
+#include "hal/host/file_param_store.hpp"
+#include "hal/host/mem_can_bus.hpp"
+#include "hal/host/pty_serial.hpp"
+#include "hal/host/realtime_clock.hpp"
+#include "hal/host/replay_sources.hpp"
+#include "hal/host/socketcan_bus.hpp"
+#include "hal/host/stdio_serial.hpp"
+#include "tools/cli/args.hpp"
+#include "tools/dataset/recording.hpp"
+#include "tools/hil/clock_mapped_sources.hpp"
+
+namespace uwbnav::cli {
+namespace {
+
+volatile bool g_stop = false;  // set by SIGINT/SIGTERM, read once per cycle by RealtimeLoop
+volatile int g_signal = 0;
+
+void on_signal(int sig) {
+  g_signal = sig;
+  g_stop = true;
+}
+
+void install_signal_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = 0;  // no SA_RESTART: blocking accept/poll return on a signal
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+  signal(SIGPIPE, SIG_IGN);
+}
+
+uint64_t clock_us(clockid_t id) {
+  timespec ts{};
+  clock_gettime(id, &ts);
+  return static_cast<uint64_t>(ts.tv_sec) * 1000000U + static_cast<uint64_t>(ts.tv_nsec) / 1000U;
+}
+
+// Sensor sources of a HIL board: nothing local, the samples arrive over CAN.
+class NoImu final : public hal::ImuSource {
+ public:
+  Status poll(uint64_t, ImuSample&) override { return Status::kEmpty; }
+  bool finished() const override { return false; }
+};
+class NoUwb final : public hal::UwbSource {
+ public:
+  Status poll(uint64_t, UwbRange&) override { return Status::kEmpty; }
+  bool finished() const override { return false; }
+};
+
+// Ends the run when the replayed recording is exhausted; reports a rig that went away.
+class RunWatch final : public AppObserver {
+ public:
+  RunWatch(const hal::ImuSource& imu, const hal::UwbSource& uwb, bool replay, const hal::CanBus& bus, bool link)
+      : imu_(imu), uwb_(uwb), replay_(replay), bus_(bus), link_(link) {}
+  void on_range(const RangeReport&) override {}
+  void on_output(const NavOutput&) override {
+    if (replay_ && imu_.finished() && uwb_.finished()) {
+      end_of_recording = true;
+      g_stop = true;
+    }
+    if (link_ && !reported_down_ && bus_.state() == hal::CanBusState::kDown) {
+      reported_down_ = true;
+      std::fprintf(stderr, "firmware: CAN link closed by the peer; running on until stopped\n");
+    }
+  }
+  bool end_of_recording = false;
+
+ private:
+  const hal::ImuSource& imu_;
+  const hal::UwbSource& uwb_;
+  bool replay_;
+  const hal::CanBus& bus_;
+  bool link_;
+  bool reported_down_ = false;
+};
+
+// Waits for the rig to connect to the link (until a signal or the duration).
+bool accept_rig(const std::string& path, uint64_t give_up_us, hal::SocketCanBus& bus) {
+  int listen_fd = -1;
+  std::string err;
+  if (!ok(hal::can_link_listen(path, listen_fd, &err))) {
+    std::fprintf(stderr, "uwbnav firmware: %s\n", err.c_str());
+    return false;
+  }
+  std::printf("firmware: CAN link listening on %s, waiting for the rig\n", path.c_str());
+  std::fflush(stdout);
+  int fd = -1;
+  Status s = Status::kEmpty;
+  while (!g_stop && (give_up_us == 0 || clock_us(CLOCK_MONOTONIC) < give_up_us)) {
+    s = hal::can_link_accept(listen_fd, 200, fd, &err);
+    if (s != Status::kEmpty) break;
+  }
+  ::close(listen_fd);
+  if (!ok(s)) {
+    if (!g_stop && s != Status::kEmpty) std::fprintf(stderr, "uwbnav firmware: %s\n", err.c_str());
+    return false;
+  }
+  if (!ok(bus.adopt_fd(fd))) {
+    std::fprintf(stderr, "uwbnav firmware: cannot use the link: %s\n", bus.last_error().c_str());
+    return false;
+  }
+  std::printf("firmware: rig connected\n");
+  std::fflush(stdout);
+  return true;
+}
+
+struct RunSummary {
+  AppStats stats;
+  can::CanTxStats can_tx;
+  can::CanSensorStats can_rx;
+  hal::CanCounters bus;
+  const char* why = "signal";
+  double wall_s = 0.0;
+};
+
+void print_summary(const RunSummary& s) {
+  const LoopStats& l = s.stats.loop;
+  std::printf("firmware: stopped (%s) after %.1f s\n", s.why, s.wall_s);
+  std::printf("  loop     cycles %llu  cycle min/avg/max %u/%u/%u us  overruns %llu  jitter max %u us\n",
+              static_cast<unsigned long long>(l.cycles), l.cycle_min_us, l.avg_us(), l.cycle_max_us,
+              static_cast<unsigned long long>(l.overruns), l.jitter_max_us);
+  std::printf("  CAN tx   sent %u  dropped %u  failed %u  saturated %u\n", s.can_tx.sent, s.can_tx.dropped,
+              s.can_tx.failed, s.can_tx.saturated);
+  std::printf("  CAN rx   HIL frames %u  IMU %u  UWB %u  crc %u  counter %u  length %u  lost %u  incomplete %u\n",
+              s.can_rx.frames, s.can_rx.imu_samples, s.can_rx.uwb_ranges, s.can_rx.crc_errors,
+              s.can_rx.counter_errors, s.can_rx.length_errors, s.can_rx.frames_lost, s.can_rx.incomplete);
+  const SourceStats* src[] = {&s.stats.imu, &s.stats.uwb, &s.stats.can_rx};
+  const char* names[] = {"imu", "uwb", "can_rx"};
+  for (int i = 0; i < 3; ++i) {
+    std::printf("  input    %-6s received %u  accepted %u  rejected %u", names[i], src[i]->received, src[i]->accepted,
+                src[i]->rejected_total());
+    for (uint32_t r = 0; r < kNumRejectReasons; ++r) {
+      if (src[i]->rejected[r] > 0) {
+        std::printf(" %s=%u", reject_reason_name(static_cast<RejectReason>(r)), src[i]->rejected[r]);
+      }
+    }
+    std::printf("\n");
+  }
+}
+
+}  // namespace
+
+int cmd_firmware(int argc, char** argv) {
+  Args args(argc, argv, {});
+  const std::vector<std::string> known = {"--recording", "--can-link", "--can-if", "--console", "--params",
+                                          "--can-log",   "--duration", "--site",   "--param"};
+  const std::string console = args.get("--console", "stdio");
+  const char* usage =
+      "usage: uwbnav firmware [--recording DIR | --can-link PATH | --can-if NAME] [--site DIR]\n"
+      "                       [--console stdio|pty|none] [--params FILE] [--can-log FILE] [--duration S]\n"
+      "                       [--param name=value]...\n"
+      "  sensors: --recording DIR replays DIR in real time; without it a HIL rig sends them over CAN\n"
+      "  (can.hil_rx_enable = 1) and --site DIR (a recording) gives the anchors and tags\n";
+  double duration_s = 0.0;
+  if (args.has("--duration")) {
+    char* end = nullptr;
+    duration_s = std::strtod(args.get("--duration").c_str(), &end);
+    if (*end != '\0' || !(duration_s > 0.0)) duration_s = -1.0;
+  }
+  if (!args.error().empty() || !args.positional().empty() || !args.unknown(known).empty() || duration_s < 0.0 ||
+      (console != "stdio" && console != "pty" && console != "none") ||
+      (args.has("--can-link") && args.has("--can-if"))) {
+    std::fprintf(stderr, "%s", usage);
+    return 2;
+  }
+  const bool replay = args.has("--recording");
+  const bool link = args.has("--can-link");
+  const bool socketcan = args.has("--can-if");
+  if (!replay && !link && !socketcan) {
+    std::fprintf(stderr, "uwbnav firmware: no sensor input: give --recording DIR, or a CAN bus (--can-link PATH / "
+                         "--can-if NAME) on which a HIL rig sends the sensors\n");
+    return 2;
+  }
+  const std::string site_dir = replay ? args.get("--recording") : args.get("--site");
+  if (site_dir.empty()) {
+    std::fprintf(stderr, "uwbnav firmware: HIL mode needs --site DIR (a recording whose anchors.csv/tags.csv "
+                         "describe the site)\n");
+    return 2;
+  }
+  dataset::Recording rec;
+  dataset::ReadReport read_report;
+  if (!ok(dataset::read_recording(site_dir, rec, read_report))) {
+    std::fprintf(stderr, "uwbnav firmware: cannot read %s: %s\n", site_dir.c_str(), read_report.error.c_str());
+    return 1;
+  }
+  if (!replay) {  // the site is all a HIL board takes from the recording
+    rec.imu.clear();
+    rec.uwb.clear();
+  }
+  std::vector<std::pair<std::string, float>> overrides;
+  for (const auto& p : args.all("--param")) {
+    std::pair<std::string, float> kv;
+    if (!parse_param_override(p, &kv)) {
+      std::fprintf(stderr, "uwbnav firmware: --param expects name=value, got '%s'\n", p.c_str());
+      return 2;
+    }
+    overrides.push_back(kv);
+  }
+
+  install_signal_handlers();
+  const uint64_t t_start_mono_us = clock_us(CLOCK_MONOTONIC);
+  const uint64_t give_up_us = duration_s > 0.0 ? t_start_mono_us + static_cast<uint64_t>(duration_s * 1e6) : 0;
+  RunSummary summary;
+  {
+    // Board clock = CLOCK_MONOTONIC [us], so a rig on the same host stamps samples in the firmware's time base.
+    hal::RealtimeClock clock(clock_us(CLOCK_MONOTONIC));
+
+    // CAN bus: SocketCAN interface, link to a rig, or an in-memory bus (log only).
+    hal::SocketCanBus sock_bus;
+    hal::MemCanBus mem_bus(64, 1024, 16);
+    hal::CanBus* bus = &mem_bus;
+    if (socketcan) {
+      const std::string ifname = args.get("--can-if");
+      if (!ok(sock_bus.open(ifname))) {
+        std::fprintf(stderr, "uwbnav firmware: cannot open CAN interface %s: %s\n", ifname.c_str(),
+                     sock_bus.last_error().c_str());
+        return 1;
+      }
+      bus = &sock_bus;
+    } else if (link) {
+      if (!accept_rig(args.get("--can-link"), give_up_us, sock_bus)) return g_stop ? 0 : 1;
+      bus = &sock_bus;
+    }
+    hal::CandumpLogWriter can_log;
+    std::unique_ptr<hal::CanLogTee> tee;
+    if (args.has("--can-log")) {
+      const uint64_t epoch_offset_us = clock_us(CLOCK_REALTIME) - clock_us(CLOCK_MONOTONIC);
+      const std::string ifname = socketcan ? args.get("--can-if") : "can0";
+      if (!ok(can_log.open(args.get("--can-log"), ifname, epoch_offset_us))) {
+        std::fprintf(stderr, "uwbnav firmware: cannot write %s\n", args.get("--can-log").c_str());
+        return 1;
+      }
+      tee = std::make_unique<hal::CanLogTee>(*bus, can_log, true);
+      bus = tee.get();
+    }
+
+    // Serial console.
+    hal::NullSerialPort null_serial;
+    std::unique_ptr<hal::StdioSerialPort> stdio_serial;
+    hal::PtySerialPort pty_serial;
+    hal::SerialPort* serial = &null_serial;
+    if (console == "stdio") {
+      stdio_serial = std::make_unique<hal::StdioSerialPort>();
+      serial = stdio_serial.get();
+    } else if (console == "pty") {
+      std::string err;
+      if (!ok(pty_serial.open(&err))) {
+        std::fprintf(stderr, "uwbnav firmware: cannot open a pty: %s\n", err.c_str());
+        return 1;
+      }
+      std::printf("firmware: console on %s (e.g. picocom %s)\n", pty_serial.slave_name().c_str(),
+                  pty_serial.slave_name().c_str());
+      std::fflush(stdout);
+      serial = &pty_serial;
+    }
+
+    // Parameters.
+    hal::EmptyParamStore no_store;
+    std::unique_ptr<hal::FileParamStore> file_store;
+    hal::ParamStore* store = &no_store;
+    if (args.has("--params")) {
+      file_store = std::make_unique<hal::FileParamStore>(args.get("--params"));
+      store = file_store.get();
+    }
+
+    // Sensors: the recording mapped onto the clock (first sample 100 ms from now), or nothing (HIL over CAN).
+    hal::ReplaySources replay_sources(rec);
+    const hil::TimeMap map = hil::map_recording_to_clock(rec, clock.now_us() + 100000, 1.0);
+    hil::ClockMappedImuSource mapped_imu(replay_sources.imu, map);
+    hil::ClockMappedUwbSource mapped_uwb(replay_sources.uwb, map);
+    NoImu no_imu;
+    NoUwb no_uwb;
+    hal::ImuSource& imu = replay ? static_cast<hal::ImuSource&>(mapped_imu) : no_imu;
+    hal::UwbSource& uwb = replay ? static_cast<hal::UwbSource&>(mapped_uwb) : no_uwb;
+
+    hal::Board board{imu, uwb, *bus, *serial, clock, *store, rec.site};
+    auto app = std::make_unique<App>(board);
+    if (!ok(app->init())) {
+      std::fprintf(stderr, "uwbnav firmware: the estimator rejected the site of %s\n", site_dir.c_str());
+      return 1;
+    }
+    for (const auto& [name, value] : overrides) {
+      const ParamDef* d = Params::find(name.c_str());
+      if (d == nullptr || !ok(app->set_param(d->index, value))) {
+        std::fprintf(stderr, "uwbnav firmware: bad parameter %s=%g\n", name.c_str(), static_cast<double>(value));
+        return 2;
+      }
+    }
+    if (!replay && !ok(app->set_param(ParamId::kCanHilRxEnable, 1.0F))) return 1;
+
+    RunWatch watch(imu, uwb, replay, *bus, link);
+    app->set_observer(&watch);
+    std::printf("firmware: running (%s sensors, CAN %s%s), stop with Ctrl-C\n",
+                replay ? "recording" : "HIL CAN",
+                socketcan ? args.get("--can-if").c_str() : (link ? "link" : "in memory"),
+                args.has("--can-log") ? ", logged" : "");
+    std::fflush(stdout);
+    RealtimeLoop loop(*app, clock);
+    const uint64_t now_us = clock_us(CLOCK_MONOTONIC);
+    uint64_t max_cycles = 0;
+    if (give_up_us != 0) max_cycles = give_up_us > now_us ? (give_up_us - now_us) / kCyclePeriodUs : 1;
+    loop.run(g_stop, max_cycles);
+
+    summary.stats = app->stats();
+    summary.can_tx = app->can_tx_stats();
+    summary.can_rx = app->can_rx_stats();
+    summary.bus = bus->counters();
+    summary.why = g_signal != 0 ? (g_signal == SIGINT ? "SIGINT" : "SIGTERM")
+                                : (watch.end_of_recording ? "end of recording" : "duration");
+    if (can_log.is_open()) ignore_status(can_log.close());
+  }
+  summary.wall_s = static_cast<double>(clock_us(CLOCK_MONOTONIC) - t_start_mono_us) * 1e-6;
+  print_summary(summary);
+  return 0;
+}
+
+}  // namespace uwbnav::cli

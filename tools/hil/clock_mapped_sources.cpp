@@ -1,0 +1,24 @@
+// Clock-mapped replay sources (see clock_mapped_sources.hpp).
+#include "tools/hil/clock_mapped_sources.hpp"
+
+namespace uwbnav::hil {
+
+Status ClockMappedImuSource::poll(uint64_t up_to_us, ImuSample& out) {
+  if (inner_.finished()) return Status::kEmpty;
+  const uint64_t t_clock_us = map_.to_clock_us(inner_.next_t_us());
+  if (t_clock_us > up_to_us) return Status::kEmpty;
+  const Status s = inner_.poll(UINT64_MAX, out);
+  if (ok(s)) out.t_us = t_clock_us;
+  return s;
+}
+
+Status ClockMappedUwbSource::poll(uint64_t up_to_us, UwbRange& out) {
+  if (inner_.finished()) return Status::kEmpty;
+  const uint64_t t_clock_us = map_.to_clock_us(inner_.next_t_us());
+  if (t_clock_us > up_to_us) return Status::kEmpty;
+  const Status s = inner_.poll(UINT64_MAX, out);
+  if (ok(s)) out.t_us = t_clock_us;
+  return s;
+}
+
+}  // namespace uwbnav::hil

@@ -1,0 +1,36 @@
+// Replay sources for a real-time host firmware: the recording's IMU and UWB
+// streams (hal::ReplaySources) with sensor time mapped onto the board clock,
+// so samples become due when the wall clock reaches them (t_clock = map(t_rec)).
+#pragma once
+
+#include <cstdint>
+
+#include "hal/host/replay_sources.hpp"
+#include "tools/hil/sensor_stream.hpp"
+
+namespace uwbnav::hil {
+
+class ClockMappedImuSource final : public hal::ImuSource {
+ public:
+  ClockMappedImuSource(hal::ReplayImuSource& inner, const TimeMap& map) : inner_(inner), map_(map) {}
+  // kOk with the next sample (t_us in clock time) once its clock time <= up_to_us.
+  [[nodiscard]] Status poll(uint64_t up_to_us, ImuSample& out) override;
+  bool finished() const override { return inner_.finished(); }
+
+ private:
+  hal::ReplayImuSource& inner_;
+  TimeMap map_;
+};
+
+class ClockMappedUwbSource final : public hal::UwbSource {
+ public:
+  ClockMappedUwbSource(hal::ReplayUwbSource& inner, const TimeMap& map) : inner_(inner), map_(map) {}
+  [[nodiscard]] Status poll(uint64_t up_to_us, UwbRange& out) override;
+  bool finished() const override { return inner_.finished(); }
+
+ private:
+  hal::ReplayUwbSource& inner_;
+  TimeMap map_;
+};
+
+}  // namespace uwbnav::hil
