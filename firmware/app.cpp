@@ -124,6 +124,19 @@ void App::drain_sensors(uint64_t now_us) {
 // HIL rigs inject sensors as CAN frames (docs/can.md); the decoder checks the
 // transport (E2E), the validator the physics, exactly as for any other source.
 void App::drain_can_sensors(uint64_t now_us) {
+  // Samples stamped after this cycle's deadline (the loop woke late and the
+  // rig already sent them) wait for the next cycle instead of being "future".
+  size_t kept = 0;
+  for (size_t k = 0; k < can_pending_count_; ++k) {
+    const can::CanSensorSample& p = can_pending_[k];
+    const uint64_t t = p.kind == can::SensorKind::kImu ? p.imu.t_us : p.uwb.t_us;
+    if (t > now_us) {
+      can_pending_[kept++] = p;
+    } else {
+      accept_can_sample(p, now_us);
+    }
+  }
+  can_pending_count_ = kept;
   hal::CanFrame f;
   for (size_t n = 0; n < kMaxCanRxPerCycle; ++n) {
     if (imu_count_ >= kMaxImuPerCycle || uwb_count_ >= kMaxUwbPerCycle) break;
@@ -136,11 +149,20 @@ void App::drain_can_sensors(uint64_t now_us) {
       continue;
     }
     if (!ok(s)) continue;
-    if (sample.kind == can::SensorKind::kImu) {
-      ignore_result(accept_imu(sample.imu, now_us, stats_.can_rx));
-    } else if (sample.kind == can::SensorKind::kUwb) {
-      ignore_result(accept_uwb(sample.uwb, now_us, stats_.can_rx));
+    const uint64_t t = sample.kind == can::SensorKind::kImu ? sample.imu.t_us : sample.uwb.t_us;
+    if (t > now_us && can_pending_count_ < kMaxCanPending) {
+      can_pending_[can_pending_count_++] = sample;
+      continue;
     }
+    accept_can_sample(sample, now_us);
+  }
+}
+
+void App::accept_can_sample(const can::CanSensorSample& sample, uint64_t now_us) {
+  if (sample.kind == can::SensorKind::kImu && imu_count_ < kMaxImuPerCycle) {
+    ignore_result(accept_imu(sample.imu, now_us, stats_.can_rx));
+  } else if (sample.kind == can::SensorKind::kUwb && uwb_count_ < kMaxUwbPerCycle) {
+    ignore_result(accept_uwb(sample.uwb, now_us, stats_.can_rx));
   }
 }
 

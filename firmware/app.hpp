@@ -21,6 +21,7 @@ constexpr uint32_t kCyclePeriodUs = 10000;  // 100 Hz loop
 constexpr size_t kMaxImuPerCycle = 32;      // frames drained per cycle; more wait for the next cycle
 constexpr size_t kMaxUwbPerCycle = 32;
 constexpr size_t kMaxCanRxPerCycle = 64;    // HIL input frames read per cycle
+constexpr size_t kMaxCanPending = 16;       // HIL samples held for the next cycle; beyond: validated now (future)
 
 // Host-side tap on what the firmware computed (replay writers, tests, HIL).
 // The firmware calls it synchronously; implementations must not block.
@@ -69,6 +70,7 @@ class App {
  private:
   void drain_sensors(uint64_t now_us);
   void drain_can_sensors(uint64_t now_us);
+  void accept_can_sample(const can::CanSensorSample& sample, uint64_t now_us);
   [[nodiscard]] bool accept_imu(const ImuSample& imu, uint64_t now_us, SourceStats& src);
   [[nodiscard]] bool accept_uwb(const UwbRange& r, uint64_t now_us, SourceStats& src);
   void process_in_time_order();
@@ -82,6 +84,8 @@ class App {
   can::CanDiag can_diag_;
   can::CanSensorDecoder can_decoder_;
   bool hil_rx_enabled_ = false;
+  can::CanSensorSample can_pending_[kMaxCanPending];  // HIL samples due in a later cycle
+  size_t can_pending_count_ = 0;
   AppStats stats_;
   AppObserver* observer_ = nullptr;
   NavOutput last_output_;

@@ -125,7 +125,7 @@ class GatingLayer {
   float raim_pfa_local_ = -1.0F;
   float chan_lo_db_ = 6.0F;
   float chan_hi_db_ = 10.0F;
-  float chan_p_max_ = 0.9F;
+  float chan_p_max_ = 0.99F;
   uint16_t hyst_n_ = 2;
   uint64_t escape_us_ = 2000000;
   float escape_r_scale_ = 100.0F;

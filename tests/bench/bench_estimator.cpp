@@ -4,7 +4,6 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <memory>
 #include <string>
 #include <vector>
@@ -39,9 +38,7 @@ const Fixture& fixture() {
       return out;
     }
     out.warm = std::make_unique<Navigator>();
-    Params prm;
-    if (std::getenv("BENCH_GATE_NONE")) (void)prm.set(ParamId::kGatePolicy, 0.0F);
-    if (out.warm->configure(rec.site, prm) != Status::kOk) return out;
+    if (out.warm->configure(rec.site, Params{}) != Status::kOk) return out;
     constexpr uint64_t kWarmUs = 30000000;  // past initialisation, vehicle moving
     size_t j = 0;
     for (size_t i = 0; i < rec.imu.size(); ++i) {

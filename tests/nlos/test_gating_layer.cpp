@@ -200,7 +200,10 @@ TEST(GatingLayer, DefaultStartsInRobustModeUntilFilterAgreesWithRanges) {
   EXPECT_TRUE(g.escape_active());
   EXPECT_EQ(warm.used, 4);
   EXPECT_GE(warm.min_r_scale, 4.0F);
-  // Consistent ranges verify the filter; afterwards the same 1 m innovation is rejected.
+  // Consistent ranges verify the filter (after the 3 s warm-up); afterwards the same
+  // 1 m innovation is rejected.
+  feed(g, t, 80, 0.02F);
+  EXPECT_TRUE(g.escape_active());  // 1.7 s: still warming up
   feed(g, t, 80, 0.02F);
   EXPECT_FALSE(g.escape_active());
   const GatingDecision d = g.assess(ctx_at(0, t, 21.0F, 1.0F));
@@ -213,7 +216,7 @@ TEST(GatingLayer, DefaultEscapeReadmitsDriftedFilter) {
   GatingLayer g;
   ASSERT_TRUE(ok(g.configure(make_site(), params_with(GatingPolicy::kDefault))));
   uint64_t t = 0;
-  feed(g, t, 80, 0.02F);
+  feed(g, t, 200, 0.02F);
   ASSERT_FALSE(g.escape_active());
   // The filter drifts 3 m: every innovation is -3 m (20 sigma) although the ranges are steady.
   // First rejected, then after escape_s (0.5 s = 25 ranges) without any LOS range the
@@ -238,6 +241,46 @@ TEST(GatingLayer, DefaultRejectsGrossOutlierDespiteLosEvidence) {
   ASSERT_TRUE(ok(g.configure(make_site(), p)));
   EXPECT_TRUE(g.assess(ctx_at(0, 0, 20.0F, 0.0F)).use);
   EXPECT_FALSE(g.assess(ctx_at(1, 20000, 20.0F, -20.0F)).use);  // first range of anchor 1: no Δρ
+}
+
+TEST(GatingLayer, DefaultChannelEvidenceOverrulesSmallInnovation) {
+  GatingLayer g;
+  Params p = params_with(GatingPolicy::kDefault);
+  ASSERT_TRUE(ok(p.set(ParamId::kGateEscapeS, 0.0F)));  // robust mode off: gating only
+  ASSERT_TRUE(ok(g.configure(make_site(), p)));
+  RangeContext c = ctx_at(0, 0, 20.1F, 0.1F);  // z = 0.7: nothing to see in the innovation
+  c.range.fp_power_dbm = -95.0F;
+  c.range.rx_power_dbm = -80.0F;               // 15 dB gap: classic NLOS signature
+  const GatingDecision d = g.assess(c);
+  EXPECT_TRUE(d.nlos);
+  EXPECT_FALSE(d.use);
+  c.range.t_us = 80000;
+  c.range.fp_power_dbm = -82.0F;               // 2 dB gap: neutral
+  const GatingDecision back = g.assess(c);
+  EXPECT_FALSE(back.nlos);
+  EXPECT_FALSE(back.use);  // held once by the hysteresis (hyst_n 2)
+}
+
+TEST(GatingLayer, DefaultInnovationSupersedesCoarseModels) {
+  GatingLayer g;
+  Params p = params_with(GatingPolicy::kDefault);
+  ASSERT_TRUE(ok(p.set(ParamId::kGateEscapeS, 0.0F)));
+  ASSERT_TRUE(ok(g.configure(make_site(), p)));
+  // A +1.5 m range jump in 80 ms (SVM and consistency say NLOS) that the filter predicted
+  // (innovation 0, e.g. the previous range was the NLOS one): LOS.
+  EXPECT_TRUE(g.assess(ctx_at(0, 0, 20.0F, 0.0F)).use);
+  const GatingDecision d = g.assess(ctx_at(0, 80000, 21.5F, 0.0F));
+  EXPECT_GT(d.p_svm, 0.5F);
+  EXPECT_FLOAT_EQ(d.p_mc, 0.9F);
+  EXPECT_FALSE(d.nlos);
+  // Without a converged filter the coarse models decide.
+  GatingLayer g2;
+  ASSERT_TRUE(ok(g2.configure(make_site(), p)));
+  EXPECT_TRUE(g2.assess(ctx_at(0, 0, 20.0F, 0.0F, false)).use);
+  RangeContext c = ctx_at(0, 80000, 21.5F, 0.0F, false);
+  c.speed_mps = kNaNf;       // not running yet: no speed, no travelled distance
+  c.dist_since_prev_m = kNaNf;
+  EXPECT_TRUE(g2.assess(c).nlos);  // SVM1 on the range rate alone
 }
 
 TEST(GatingLayer, UsedCountersFollowOnResult) {

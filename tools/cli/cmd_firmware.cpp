@@ -108,6 +108,7 @@ bool accept_rig(const std::string& path, uint64_t give_up_us, hal::SocketCanBus&
     if (s != Status::kEmpty) break;
   }
   ::close(listen_fd);
+  ::unlink(path.c_str());  // one rig per run: the socket file goes with the listener
   if (!ok(s)) {
     if (!g_stop && s != Status::kEmpty) std::fprintf(stderr, "uwbnav firmware: %s\n", err.c_str());
     return false;

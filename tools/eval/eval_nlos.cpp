@@ -285,7 +285,8 @@ void evaluate_table(const std::string& path, int folds, uint64_t seed, size_t ma
 int usage() {
   std::fprintf(stderr,
                "usage: uwbnav eval nlos [--protocol-seeds 11,12] [--drive-seeds 21,22] [--drive PRESET]\n"
-               "         [--table FILE.csv] [--folds K] [--no-positioning] [--quick]\n");
+               "         [--table FILE.csv] [--folds K] [--no-positioning] [--quick] [--hour]\n"
+               "  --hour: also the one-hour drive (drive_1h) for long-run stability\n");
   return 2;
 }
 
@@ -320,11 +321,16 @@ int run_eval_nlos(int argc, char** argv) {
   std::string table = "../shared/data/hanyang/hanyang_static_nlos_features.csv";
   int folds = 5;
   bool positioning = true;
+  bool hour = false;
   size_t table_samples = 6000;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--no-positioning") {
       positioning = false;
+      continue;
+    }
+    if (a == "--hour") {
+      hour = true;
       continue;
     }
     if (a == "--quick") {
@@ -388,6 +394,19 @@ int run_eval_nlos(int argc, char** argv) {
             drv, positioning);
   // (c) real channel feature table.
   evaluate_table(table, folds, 7, table_samples);
+  // Long drive: no divergence over an hour (drive_1h preset).
+  if (hour) {
+    SetResult longrun;
+    dataset::Recording rec;
+    std::string err;
+    if (!ok(sim::simulate("drive_1h", 31, rec, &err))) {
+      std::fprintf(stderr, "uwbnav eval nlos: %s\n", err.c_str());
+      return 1;
+    }
+    std::fprintf(stderr, "drive_1h seed 31\n");
+    if (!evaluate_recording(rec, {}, true, longrun)) return 1;
+    print_set("(d) drive_1h (one hour of parking_nlos loops), seed 31, all ranges", longrun, true);
+  }
   return 0;
 }
 
