@@ -285,6 +285,12 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
   // A gross outlier against a converged filter is rejected whatever the other evidence says.
   if (std::isfinite(e.z) && e.z > innov_gate_sigma_) d.nlos = true;
   if (ctx.filter_ready && !std::isfinite(e.z)) d.nlos = true;
+  // A running but untrusted filter (e.g. the constant-velocity mode without IMU) still
+  // rejects gross outliers, at twice the gate.
+  if (!ctx.filter_ready && ctx.innovation_var_m2 > 0.0F &&
+      std::fabs(ctx.innovation_m) > 2.0F * innov_gate_sigma_ * std::sqrt(ctx.innovation_var_m2)) {
+    d.nlos = true;
+  }
   d.use = !d.nlos;
   // Per-pair hysteresis: an NLOS pair needs hyst_n consecutive LOS ranges to be fused again.
   if (d.nlos) {

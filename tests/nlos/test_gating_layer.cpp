@@ -283,6 +283,15 @@ TEST(GatingLayer, DefaultInnovationSupersedesCoarseModels) {
   EXPECT_TRUE(g2.assess(c).nlos);  // SVM1 on the range rate alone
 }
 
+TEST(GatingLayer, DefaultRejectsGrossOutlierOfUntrustedFilter) {
+  // Constant-velocity mode without IMU: the Navigator predicts but does not call the
+  // filter ready. Only gross outliers (beyond twice the gate) are rejected then.
+  GatingLayer g;
+  ASSERT_TRUE(ok(g.configure(make_site(), params_with(GatingPolicy::kDefault))));
+  EXPECT_FALSE(g.assess(ctx_at(0, 0, 40.0F, 20.0F, false)).use);  // 141 sigma
+  EXPECT_TRUE(g.assess(ctx_at(1, 20000, 21.0F, 1.0F, false)).use);  // 7 sigma: kept
+}
+
 TEST(GatingLayer, UsedCountersFollowOnResult) {
   GatingLayer g;
   ASSERT_TRUE(ok(g.configure(make_site(), params_with(GatingPolicy::kNone))));
