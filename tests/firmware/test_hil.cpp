@@ -11,6 +11,7 @@
 #include "firmware/app.hpp"
 #include "firmware/can/publisher.hpp"
 #include "hal/host/file_param_store.hpp"
+#include "hal/host/idle_sources.hpp"
 #include "hal/host/lockstep_clock.hpp"
 #include "hal/host/mem_can_bus.hpp"
 #include "hal/host/replay_sources.hpp"
@@ -25,17 +26,6 @@
 
 namespace uwbnav {
 namespace {
-
-class NoImu final : public hal::ImuSource {
- public:
-  Status poll(uint64_t, ImuSample&) override { return Status::kEmpty; }
-  bool finished() const override { return false; }
-};
-class NoUwb final : public hal::UwbSource {
- public:
-  Status poll(uint64_t, UwbRange&) override { return Status::kEmpty; }
-  bool finished() const override { return false; }
-};
 
 dataset::Recording short_parking_nlos(double duration_s) {
   sim::Scenario sc;
@@ -103,8 +93,8 @@ HilRun run_hil_lockstep(const dataset::Recording& rec) {
   EXPECT_TRUE(ok(rig_bus.adopt_fd(fd_rig, opt)));
   EXPECT_TRUE(ok(fw_bus.adopt_fd(fd_fw, opt)));
 
-  NoImu imu;
-  NoUwb uwb;
+  hal::IdleImuSource imu;
+  hal::IdleUwbSource uwb;
   hal::NullSerialPort serial;
   hal::EmptyParamStore store;
   hal::Board board{imu, uwb, fw_bus, serial, clock, store, rec.site};

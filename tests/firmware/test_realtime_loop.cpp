@@ -10,6 +10,7 @@
 #include "firmware/app.hpp"
 #include "firmware/realtime_loop.hpp"
 #include "hal/host/file_param_store.hpp"
+#include "hal/host/idle_sources.hpp"
 #include "hal/host/mem_can_bus.hpp"
 
 namespace uwbnav {
@@ -31,17 +32,6 @@ class FakeClock final : public hal::Clock {
 
  private:
   uint64_t t_us_;
-};
-
-class NoImu final : public hal::ImuSource {
- public:
-  Status poll(uint64_t, ImuSample&) override { return Status::kEmpty; }
-  bool finished() const override { return false; }
-};
-class NoUwb final : public hal::UwbSource {
- public:
-  Status poll(uint64_t, UwbRange&) override { return Status::kEmpty; }
-  bool finished() const override { return false; }
 };
 
 // Called inside App::tick: spends the scripted work time on the fake clock,
@@ -81,8 +71,8 @@ struct Rig {
     EXPECT_TRUE(ok(app->init()));
     app->set_observer(&script);
   }
-  NoImu imu;
-  NoUwb uwb;
+  hal::IdleImuSource imu;
+  hal::IdleUwbSource uwb;
   hal::MemCanBus can;
   hal::NullSerialPort serial;
   hal::EmptyParamStore store;

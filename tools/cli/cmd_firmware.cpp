@@ -15,6 +15,7 @@
 #include "firmware/realtime_loop.hpp"
 #include "hal/host/candump_log.hpp"
 #include "hal/host/file_param_store.hpp"
+#include "hal/host/idle_sources.hpp"
 #include "hal/host/mem_can_bus.hpp"
 #include "hal/host/pty_serial.hpp"
 #include "hal/host/realtime_clock.hpp"
@@ -51,18 +52,6 @@ uint64_t clock_us(clockid_t id) {
   clock_gettime(id, &ts);
   return static_cast<uint64_t>(ts.tv_sec) * 1000000U + static_cast<uint64_t>(ts.tv_nsec) / 1000U;
 }
-
-// Sensor sources of a HIL board: nothing local, the samples arrive over CAN.
-class NoImu final : public hal::ImuSource {
- public:
-  Status poll(uint64_t, ImuSample&) override { return Status::kEmpty; }
-  bool finished() const override { return false; }
-};
-class NoUwb final : public hal::UwbSource {
- public:
-  Status poll(uint64_t, UwbRange&) override { return Status::kEmpty; }
-  bool finished() const override { return false; }
-};
 
 // Ends the run when the replayed recording is exhausted; reports a rig that went away.
 class RunWatch final : public AppObserver {
@@ -286,8 +275,8 @@ int cmd_firmware(int argc, char** argv) {
     const hil::TimeMap map = hil::map_recording_to_clock(rec, clock.now_us() + 100000, 1.0);
     hil::ClockMappedImuSource mapped_imu(replay_sources.imu, map);
     hil::ClockMappedUwbSource mapped_uwb(replay_sources.uwb, map);
-    NoImu no_imu;
-    NoUwb no_uwb;
+    hal::IdleImuSource no_imu;
+    hal::IdleUwbSource no_uwb;
     hal::ImuSource& imu = replay ? static_cast<hal::ImuSource&>(mapped_imu) : no_imu;
     hal::UwbSource& uwb = replay ? static_cast<hal::UwbSource&>(mapped_uwb) : no_uwb;
 

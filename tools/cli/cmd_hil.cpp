@@ -15,6 +15,7 @@
 #include "hal/host/candump_log.hpp"
 #include "hal/host/socketcan_bus.hpp"
 #include "tools/cli/args.hpp"
+#include "tools/dataset/fs.hpp"
 #include "tools/dataset/recording.hpp"
 #include "tools/hil/child_process.hpp"
 #include "tools/hil/hil_rig.hpp"
@@ -29,17 +30,6 @@ uint64_t clock_us(clockid_t id) {
   timespec ts{};
   clock_gettime(id, &ts);
   return static_cast<uint64_t>(ts.tv_sec) * 1000000U + static_cast<uint64_t>(ts.tv_nsec) / 1000U;
-}
-
-bool make_dirs(const std::string& dir) {
-  std::string path;
-  for (size_t i = 0; i <= dir.size(); ++i) {
-    if (i == dir.size() || dir[i] == '/') {
-      if (!path.empty() && ::mkdir(path.c_str(), 0755) != 0 && errno != EEXIST) return false;
-    }
-    if (i < dir.size()) path += dir[i];
-  }
-  return true;
 }
 
 bool parse_double(const std::string& s, double* out) {
@@ -100,7 +90,7 @@ int cmd_hil(int argc, char** argv) {
     return 1;
   }
   const std::string out = args.get("--out");
-  if (!out.empty() && !make_dirs(out)) {
+  if (!out.empty() && !dataset::make_dirs(out)) {
     std::fprintf(stderr, "uwbnav hil: cannot create %s\n", out.c_str());
     return 1;
   }

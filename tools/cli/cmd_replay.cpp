@@ -8,6 +8,7 @@
 #include <string>
 
 #include "tools/cli/args.hpp"
+#include "tools/dataset/fs.hpp"
 #include "tools/dataset/recording.hpp"
 #include "tools/eval/replay.hpp"
 #include "tools/eval/summary.hpp"
@@ -15,17 +16,6 @@
 
 namespace uwbnav::cli {
 namespace {
-
-bool make_dir(const std::string& dir) {
-  std::string path;
-  for (size_t i = 0; i <= dir.size(); ++i) {
-    if (i == dir.size() || dir[i] == '/') {
-      if (!path.empty() && ::mkdir(path.c_str(), 0755) != 0 && errno != EEXIST) return false;
-    }
-    if (i < dir.size()) path += dir[i];
-  }
-  return true;
-}
 
 int replay_and_report(const dataset::Recording& rec, const std::string& out, const Args& args) {
   eval::ReplayOptions opt;
@@ -39,7 +29,7 @@ int replay_and_report(const dataset::Recording& rec, const std::string& out, con
     }
     opt.params.push_back(kv);
   }
-  if (!make_dir(out)) {
+  if (!dataset::make_dirs(out)) {
     std::fprintf(stderr, "uwbnav: cannot create %s\n", out.c_str());
     return 1;
   }
@@ -92,7 +82,7 @@ int cmd_run(int argc, char** argv) {
     return 1;
   }
   const std::string rec_dir = out + "/recording";
-  if (!make_dir(rec_dir) || !ok(dataset::write_recording(rec_dir, rec))) {
+  if (!dataset::make_dirs(rec_dir) || !ok(dataset::write_recording(rec_dir, rec))) {
     std::fprintf(stderr, "uwbnav run: cannot write %s\n", rec_dir.c_str());
     return 1;
   }

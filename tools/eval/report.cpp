@@ -1,5 +1,6 @@
 // `uwbnav eval report` (see report.hpp): every method over every recording,
 // tables in the form of seed 000 Tables 2-5, series for the figures, figures.
+#include "tools/dataset/fs.hpp"
 #include "tools/eval/report.hpp"
 
 #include <sys/stat.h>
@@ -48,17 +49,6 @@ constexpr PolicyRow kPolicies[] = {
     {"EKF + RAIM (seed 001)", "ekf_raim", GatingPolicy::kRaim},
     {"uwbnav default", "default", GatingPolicy::kDefault},
 };
-
-bool make_dirs(const std::string& dir) {
-  std::string path;
-  for (size_t i = 0; i <= dir.size(); ++i) {
-    if (i == dir.size() || dir[i] == '/') {
-      if (!path.empty() && ::mkdir(path.c_str(), 0755) != 0 && errno != EEXIST) return false;
-    }
-    if (i < dir.size()) path += dir[i];
-  }
-  return true;
-}
 
 Confusion confusion_of(const dataset::Recording& rec, const std::vector<RangeReport>& ranges) {
   std::map<std::tuple<uint64_t, uint16_t, uint8_t>, int8_t> labels;
@@ -359,7 +349,7 @@ RecordingReport evaluate_recording(const dataset::Recording& rec, const std::str
 }
 
 Status write_recording_report(const RecordingReport& r, const std::string& dir, bool figures) {
-  if (!make_dirs(dir)) return Status::kIoError;
+  if (!dataset::make_dirs(dir)) return Status::kIoError;
   std::FILE* f = std::fopen((dir + "/tables.md").c_str(), "w");
   if (f == nullptr) return Status::kIoError;
   write_md_tables(f, r);
@@ -394,7 +384,7 @@ int run_eval_report(int argc, char** argv) {
                          "  RECORDING: a format v1 directory, or sim:PRESET[:SEED]\n");
     return 2;
   }
-  if (!make_dirs(out)) {
+  if (!dataset::make_dirs(out)) {
     std::fprintf(stderr, "uwbnav eval report: cannot create %s\n", out.c_str());
     return 1;
   }
