@@ -28,6 +28,12 @@ constexpr Real kHardGateSigma = Real(10);
 constexpr Real kHardGateMin_m = Real(2);
 // ... and the horizontal specific force below this (a steady brake is not rest) [m/s^2].
 constexpr Real kRestMaxHorizAccel_mps2 = Real(0.1);
+// Time constant of the on-line IMU noise floor [s].
+constexpr Real kNoiseFloorTau_s = Real(1);
+// Divergence monitor: fewest ranges judged; with sparse ranging the window
+// stretches back to cover them (up to kMonitorMaxSpanUs).
+constexpr size_t kMonitorMinRanges = 10;
+constexpr uint64_t kMonitorMaxSpanUs = 30000000;
 
 }  // namespace
 
@@ -101,6 +107,8 @@ void Navigator::update_params(const Params& params) {
   c.diverge_window_us = us_param(params[ParamId::kEkfDivergeWindow] * 1e6F);
   c.degraded_sigma = static_cast<Real>(params[ParamId::kEkfDegradedSigma]);
   c.init_speed = static_cast<Real>(params[ParamId::kEkfInitSpeed]);
+  c.init_yaw_sigma = static_cast<Real>(params[ParamId::kEkfInitYawSigma]);
+  imu_eff_ = c.imu;
   rest_.configure(static_cast<Real>(params[ParamId::kEkfRestWindow]), static_cast<Real>(params[ParamId::kEkfRestAccelStd]),
                   static_cast<Real>(params[ParamId::kEkfRestGyroMax]));
   if (configured_) gating_.update_params(params);
@@ -126,6 +134,25 @@ bool Navigator::imu_alive(uint64_t t_us) const {
   return diag_.imu_samples > 0 && diff_us(t_us, diag_.last_imu_t_us) <= static_cast<int64_t>(cfg_.imu_timeout_us);
 }
 
+void Navigator::track_imu_noise(const Vec3& accel_body_mps2, const Vec3& gyro_body_radps, Real dt_s) {
+  // Second difference f_k - 2 f_k-1 + f_k-2: smooth motion cancels, white noise
+  // of per-sample variance s2 gives variance 6 s2; its density^2 is s2 dt.
+  const Vec3 f1 = to_vec3(prev_imu_.accel_body_mps2);
+  const Vec3 w1 = to_vec3(prev_imu_.gyro_body_radps);
+  if (imu_history_ >= 2 && dt_s > Real(0)) {
+    const Real a = std::fmin(dt_s / kNoiseFloorTau_s, Real(1));
+    const Vec3 d2f = accel_body_mps2 - Real(2) * f1 + prev2_accel_body_mps2_;
+    const Vec3 d2w = gyro_body_radps - Real(2) * w1 + prev2_gyro_body_radps_;
+    accel_d2_ms_ += a * (d2f.squaredNorm() / Real(3) - accel_d2_ms_);
+    gyro_d2_ms_ += a * (d2w.squaredNorm() / Real(3) - gyro_d2_ms_);
+    imu_eff_.accel_noise = std::fmax(cfg_.imu.accel_noise, std::sqrt(accel_d2_ms_ / Real(6) * dt_s));
+    imu_eff_.gyro_noise = std::fmax(cfg_.imu.gyro_noise, std::sqrt(gyro_d2_ms_ / Real(6) * dt_s));
+  }
+  prev2_accel_body_mps2_ = f1;
+  prev2_gyro_body_radps_ = w1;
+  if (imu_history_ < 2) ++imu_history_;
+}
+
 Status Navigator::on_imu(const ImuSample& imu) {
   if (!configured_) return Status::kNotInitialised;
   const Vec3 f = to_vec3(imu.accel_body_mps2);
@@ -133,6 +160,11 @@ Status Navigator::on_imu(const ImuSample& imu) {
   if (!f.allFinite() || !w.allFinite()) return Status::kNotFinite;
   if (have_prev_imu_ && imu.t_us <= prev_imu_.t_us) return Status::kInvalidArgument;
   const bool gap = !have_prev_imu_ || imu.t_us - prev_imu_.t_us > cfg_.imu_timeout_us;
+  if (gap) {
+    imu_history_ = 0;
+  } else {
+    track_imu_noise(f, w, seconds(diff_us(imu.t_us, prev_imu_.t_us)));
+  }
   ++diag_.imu_samples;
   diag_.last_imu_t_us = imu.t_us;
   rest_.add(imu.t_us, f, w);
@@ -160,7 +192,7 @@ Status Navigator::on_imu(const ImuSample& imu) {
     const Real dt = seconds(diff_us(imu.t_us, prev_imu_.t_us));
     const Vec3 f_mean = Real(0.5) * (f + to_vec3(prev_imu_.accel_body_mps2));
     const Vec3 w_mean = Real(0.5) * (w + to_vec3(prev_imu_.gyro_body_radps));
-    ekf_.predict_imu(f_mean, w_mean, dt, static_cast<Real>(site_.gravity_mps2), cfg_.imu);
+    ekf_.predict_imu(f_mean, w_mean, dt, static_cast<Real>(site_.gravity_mps2), imu_eff_);
     t_state_us_ = imu.t_us;
     apply_constraints(imu.t_us);
     check_health();
@@ -287,7 +319,10 @@ RangeReport Navigator::on_range(const UwbRange& range) {
   // whatever the policy says (a drifted filter is re-initialised by the
   // divergence monitor instead of being dragged by blunders).
   const Real innov_abs = running && pred.valid ? std::fabs(static_cast<Real>(range.range_m) - pred.range_m) : Real(0);
-  const bool gross = innov_abs > kHardGateSigma * std::sqrt(s_nom) && innov_abs > kHardGateMin_m;
+  // The gating layer's escape (robust mode with inflated R) exists for a filter
+  // that drifted away from its own gate: the hard guard must not undo it.
+  const bool escape = gating_.escape_active() && d.use;
+  const bool gross = !escape && innov_abs > kHardGateSigma * std::sqrt(s_nom) && innov_abs > kHardGateMin_m;
   if (running && pred.valid && d.use && !gross) {
     const Real scale = std::isfinite(d.r_scale) && d.r_scale >= 1.0F ? static_cast<Real>(d.r_scale) : Real(1);
     used = ekf_.update_prepared(static_cast<Real>(range.range_m) - pred.range_m, r_nom * scale).applied;
@@ -331,6 +366,7 @@ RangeReport Navigator::on_range(const UwbRange& range) {
     if (cv_mode_ && imu_alive(range.t_us)) {
       // IMU recovery: build the LS track and try the heading in the background.
       if (init_track(ai, ti, range) && levelled_) try_heading(range.t_us);
+      if (cv_mode_ && levelled_) yaw_bank_on_range(ai, ti, range);
     }
   } else {
     init_on_range(ai, ti, range);
@@ -349,21 +385,26 @@ void Navigator::monitor_divergence(uint64_t t_us, Real nis) {
   uint64_t oldest = t_us;
   for (size_t k = 0; k < monitor_count_; ++k) {
     const size_t i = (monitor_head_ + kMonitorCapacity - 1 - k) % kMonitorCapacity;
-    if (t_us - monitor_t_us_[i] > cfg_.diverge_window_us) break;
+    const uint64_t age = t_us - monitor_t_us_[i];
+    // The window, or with sparse ranging the last kMonitorMinRanges ranges.
+    if (age > cfg_.diverge_window_us && (n >= kMonitorMinRanges || age > kMonitorMaxSpanUs)) break;
     ++n;
     if (monitor_bad_[i]) ++bad;
     oldest = monitor_t_us_[i];
   }
   // Judge only a full window with enough ranges (a short burst of NLOS is the gate's business).
   const bool window_covered = t_us - oldest >= cfg_.diverge_window_us * 3 / 4 || n >= kMonitorCapacity;
-  if (n >= 20 && window_covered && static_cast<Real>(bad) >= cfg_.diverge_fraction * static_cast<Real>(n)) {
+  if (n >= kMonitorMinRanges && window_covered &&
+      static_cast<Real>(bad) >= cfg_.diverge_fraction * static_cast<Real>(n)) {
     ++diag_.reinits;
     // Keep the attitude and gyro bias (the IMU solution rarely diverges in
     // attitude first); re-acquire position and heading from UWB.
     const Quat q = ekf_.state().q_nav_body;
     const Vec3 bg = ekf_.state().bg_body_radps;
     const bool had_imu = !cv_mode_;
+    const uint64_t window_us = window_us_;  // the fix window learnt for this ranging rate
     restart(false);
+    window_us_ = window_us;
     after_failure_ = true;
     if (had_imu) {
       q_init_ = q;

@@ -13,6 +13,7 @@
 #include "estimator/rest_detector.hpp"
 #include "estimator/status.hpp"
 #include "estimator/types.hpp"
+#include "estimator/yaw_gsf.hpp"
 
 namespace uwbnav {
 
@@ -103,6 +104,7 @@ class Navigator {
     uint64_t diverge_window_us = 4000000;
     Real degraded_sigma = Real(1);
     Real init_speed = Real(1);
+    Real init_yaw_sigma = Real(0.12);
   };
 
   // Latest range per anchor/tag pair (initial fix).
@@ -133,11 +135,18 @@ class Navigator {
   bool track_moving(uint64_t t_us) const;
   void start_filter(uint64_t t_us, const TrackFix& fix, Real yaw_rad, Real yaw_sigma_rad, const Vec3& vel_nav_mps,
                     Real vel_sigma_mps);
+  void start_filter_at(uint64_t t_us, const Vec3& pos_nav_m, const Vec3& pos_sigma_m, Real yaw_rad,
+                       Real yaw_sigma_rad, const Vec3& vel_nav_mps, const Vec3& vel_sigma_mps);
+  void yaw_bank_on_range(int anchor_index, int tag_index, const UwbRange& range);
+  void start_from_yaw_bank(uint64_t t_us, Real max_yaw_sigma_rad);
+  YawGsf::Noise yaw_bank_noise() const;
+  Status robust_ls_fix(LsRange* ranges, size_t n, const LsOptions& opt, LsFix& ls) const;
   void setup_height(Real origin_z_m);
   void start_cv_filter(uint64_t t_us, const TrackFix& fix);
 
   // navigator.cpp
   bool imu_alive(uint64_t t_us) const;
+  void track_imu_noise(const Vec3& accel_body_mps2, const Vec3& gyro_body_radps, Real dt_s);
   void enter_cv_mode();
   void apply_constraints(uint64_t t_us);
   bool fuse(const ScalarObs& obs);
@@ -168,6 +177,14 @@ class Navigator {
 
   bool have_prev_imu_ = false;
   ImuSample prev_imu_;
+  // IMU noise floor measured on line (second differences of the samples):
+  // vibration on air platforms is far above the data-sheet densities.
+  Vec3 prev2_accel_body_mps2_ = Vec3::Zero();
+  Vec3 prev2_gyro_body_radps_ = Vec3::Zero();
+  int imu_history_ = 0;              // consecutive samples without a gap (saturates at 2)
+  Real accel_d2_ms_ = Real(0);       // EMA of the squared second difference, mean over axes [(m/s^2)^2]
+  Real gyro_d2_ms_ = Real(0);        // same for the gyro [(rad/s)^2]
+  ImuNoise imu_eff_;                 // densities used: max(parameter, measured floor)
   Vec3 last_gyro_body_radps_ = Vec3::Zero();
 
   // Initialisation state.
@@ -189,6 +206,7 @@ class Navigator {
   uint64_t heading_wait_since_us_ = 0;
   bool have_fix_ = false;
   Vec3 last_fix_origin_nav_m_ = Vec3::Zero();  // output while initialising
+  YawGsf gsf_;                    // yaw hypotheses while no heading source has answered
 
   // Per anchor/tag pair: filter tag position at the previous range (gating context).
   Vec3 prev_tag_pos_[kMaxAnchors][kMaxTags];

@@ -20,6 +20,17 @@ constexpr Real kWeakHeightFactor = Real(5);        // auto height mode, non-plan
 constexpr uint64_t kTrackSpacingUs = 100000;      // track: shortest interval between stored fixes [us]
 constexpr uint64_t kTrackFreshUs = 1000000;       // rest check: LS track span looked at [us]
 constexpr Real kRestTrackDist_m = Real(0.1);       // rest check: allowed track motion beyond noise [m]
+constexpr int kYawBankMinUpdates = 10;             // yaw bank: fewest ranges before it may start the filter
+constexpr Real kYawBankCorrTime_s = Real(1);       // yaw bank: correlation time turning bias/tilt into white noise [s]
+constexpr Real kTiltSigmaRest_rad = Real(0.01);    // tilt 1-sigma after levelling at rest [rad]
+constexpr Real kTiltSigmaMoving_rad = Real(0.05);  // tilt 1-sigma when levelled on the move [rad]
+constexpr Real kMaxLinearYawSigma_rad = Real(0.5); // largest yaw 1-sigma the IMU filter is started with
+
+// Chi-square acceptance of an LS fix with dof degrees of freedom (~99.9 % for small dof).
+bool ls_consistent(const LsFix& ls) {
+  if (ls.dof == 0) return static_cast<Real>(ls.gdop) <= Real(10);
+  return static_cast<Real>(ls.weighted_ssr) <= Real(10) + Real(6) * static_cast<Real>(ls.dof);
+}
 
 }  // namespace
 
@@ -54,6 +65,7 @@ void Navigator::restart(bool counted_reset) {
   last_constraint_us_ = 0;
   have_fix_ = false;
   gating_.reset();
+  gsf_.reset();
   ekf_.init(NominalState{}, ErrVec::Ones());
 }
 
@@ -62,7 +74,12 @@ void Navigator::init_on_imu(const ImuSample& imu) {
   const Real dt = static_cast<Real>(imu.t_us - prev_imu_.t_us) * Real(1e-6);
   if (levelled_) {
     // Attitude with an arbitrary (relative) yaw until the heading is known.
-    q_init_ = quat_normalised(quat_mul(q_init_, quat_exp((w_mean - bg_init_) * dt)));
+    const Vec3 dtheta = (w_mean - bg_init_) * dt;
+    if (gsf_.active()) {
+      const Vec3 f_mean = Real(0.5) * (to_vec3(imu.accel_body_mps2) + to_vec3(prev_imu_.accel_body_mps2));
+      gsf_.accumulate(quat_to_dcm(quat_mul(q_init_, quat_exp(Real(0.5) * dtheta))) * f_mean, dt);
+    }
+    q_init_ = quat_normalised(quat_mul(q_init_, quat_exp(dtheta)));
   }
   // Judge rest at the constraint rate (O(window) each time).
   if (imu.t_us - last_constraint_us_ < cfg_.constraint_period_us) return;
@@ -118,17 +135,16 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix) {
   LsOptions opt;
   opt.known_z_m = static_cast<float>(cfg_.origin_height + (levelled_ ? lever_level.z() : lev.z()));
   LsFix ls;
+  // 3-D when the layout allows it; 2-D (known height) for planar layouts or
+  // when the 3-D geometry is singular - never as a way around a 3-D fix that
+  // failed its own consistency test (the height assumption would absorb it).
   Status st = Status::kSingular;
-  if (!planar_ && n >= 4) st = ls_taylor_solve(ranges, n, opt, ls);
-  if (st != Status::kOk && n >= 3) {
+  if (!planar_ && n >= 4) st = robust_ls_fix(ranges, n, opt, ls);
+  if (st != Status::kOk && st != Status::kRejected && n >= 3) {
     opt.two_d = true;
-    st = ls_taylor_solve(ranges, n, opt, ls);
+    st = robust_ls_fix(ranges, n, opt, ls);
   }
-  if (st != Status::kOk || !ls.converged) return false;
-  // Reject fixes that contradict their own ranges (NLOS or a stale range):
-  // chi-square with dof degrees of freedom, ~99.9 % for small dof.
-  if (ls.dof > 0 && static_cast<Real>(ls.weighted_ssr) > Real(10) + Real(6) * static_cast<Real>(ls.dof)) return false;
-  if (ls.dof == 0 && static_cast<Real>(ls.gdop) > Real(10)) return false;
+  if (st != Status::kOk) return false;
   fix.t_us = t_us;
   fix.tag_pos_nav_m = to_vec3(ls.pos_nav_m);
   fix.sigma_h_m = std::sqrt(static_cast<Real>(ls.cov_nav_m2[0][0] + ls.cov_nav_m2[1][1]));
@@ -136,6 +152,40 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix) {
   fix.tag_index = tag_index;
   last_fix_sigma_z_m_ = opt.two_d ? Real(-1) : std::sqrt(static_cast<Real>(ls.cov_nav_m2[2][2]));
   return std::isfinite(fix.sigma_h_m);
+}
+
+Status Navigator::robust_ls_fix(LsRange* ranges, size_t n, const LsOptions& opt, LsFix& ls) const {
+  // A fix must agree with its own ranges (chi-square). When it does not, one
+  // range is NLOS or stale: leave each range out in turn (seed 001 RAIM
+  // exclusion, by the smallest remaining statistic rather than the largest
+  // residual, which an LS fix spreads over the good ranges) and keep the best
+  // consistent subset that still has redundancy. At most n + 1 solves.
+  const Status st = ls_taylor_solve(ranges, n, opt, ls);
+  if (st != Status::kOk) return st;
+  if (ls.converged && ls_consistent(ls)) return Status::kOk;
+  const size_t unknowns = opt.two_d ? 2 : 3;
+  // After the exclusion two degrees of freedom must remain: with one, a second
+  // bad range is detectable but the choice of the excluded one is a guess
+  // (measured: spurious 0.5 m jumps of the LS track at rest, read as motion).
+  if (n < unknowns + 3) return Status::kRejected;
+  LsRange subset[kLsMaxRanges];
+  LsFix best;
+  bool found = false;
+  for (size_t skip = 0; skip < n; ++skip) {
+    size_t m = 0;
+    for (size_t i = 0; i < n; ++i) {
+      if (i != skip) subset[m++] = ranges[i];
+    }
+    LsFix cand;
+    if (ls_taylor_solve(subset, m, opt, cand) != Status::kOk || !cand.converged || !ls_consistent(cand)) continue;
+    if (!found || cand.weighted_ssr < best.weighted_ssr) {
+      best = cand;
+      found = true;
+    }
+  }
+  if (!found) return Status::kRejected;
+  ls = best;
+  return Status::kOk;
 }
 
 bool Navigator::init_track(int anchor_index, int tag_index, const UwbRange& range) {
@@ -146,7 +196,7 @@ bool Navigator::init_track(int anchor_index, int tag_index, const UwbRange& rang
     window_grow_t_us_ = t;
   }
   // Sparse ranging: widen the collection window while no fix comes (up to 10 s).
-  if (!have_fix_ && t - window_grow_t_us_ > 3 * window_us_ && window_us_ < kMaxWindowUs) {
+  if (!have_fix_ && t - window_grow_t_us_ > 2 * window_us_ && window_us_ < kMaxWindowUs) {
     window_us_ = window_us_ * 2 < kMaxWindowUs ? window_us_ * 2 : kMaxWindowUs;
     window_grow_t_us_ = t;
   }
@@ -174,6 +224,7 @@ void Navigator::begin_imu_recovery() {
   track_count_ = 0;
   for (auto& f : last_fix_per_tag_) f = TrackFix{};
   first_imu_t_us_ = 0;
+  gsf_.reset();
 }
 
 void Navigator::init_on_range(int anchor_index, int tag_index, const UwbRange& range) {
@@ -194,11 +245,64 @@ void Navigator::init_on_range(int anchor_index, int tag_index, const UwbRange& r
     heading_wait_since_us_ = t;
   }
   if (got_fix) try_heading(t);
+  if (phase_ == Phase::kWaitHeading) yaw_bank_on_range(anchor_index, tag_index, range);
   if (phase_ == Phase::kWaitHeading && t - heading_wait_since_us_ > cfg_.init_heading_timeout_us) {
-    // No heading source: start with the relative yaw and a yaw sigma that says "unknown".
+    // No heading yet. With a yaw the linearisation can carry, start the IMU
+    // filter from the bank; otherwise an IMU filter would integrate the
+    // specific force in an unknown direction and claim a covariance its
+    // linearisation cannot honour: run on ranges alone (constant velocity,
+    // degraded) while the bank keeps listening, and switch when it converges.
     const TrackFix& newest = track_[(track_head_ + kTrackCapacity - 1) % kTrackCapacity];
-    start_filter(t, newest, Real(0), Real(1.5), Vec3::Zero(), Real(1));
+    if (gsf_.active() && gsf_.yaw_sigma() < kMaxLinearYawSigma_rad) {
+      start_from_yaw_bank(t, kMaxLinearYawSigma_rad);
+    } else {
+      start_cv_filter(t, newest);
+    }
   }
+}
+
+YawGsf::Noise Navigator::yaw_bank_noise() const {
+  // The models estimate neither accelerometer bias nor tilt: both enter as
+  // white acceleration with a 1 s correlation time, on top of the measured
+  // accelerometer noise; the start yaw walks with gyro noise and bias.
+  YawGsf::Noise nz;
+  const Real tilt = levelled_at_rest_ ? kTiltSigmaRest_rad : kTiltSigmaMoving_rad;
+  const Real g_tilt = static_cast<Real>(site_.gravity_mps2) * tilt;
+  const Real ba = cfg_.accel_bias_init;
+  nz.accel_psd = std::sqrt(imu_eff_.accel_noise * imu_eff_.accel_noise + (ba * ba + g_tilt * g_tilt) * kYawBankCorrTime_s);
+  const Real bg = levelled_at_rest_ ? std::fmin(cfg_.gyro_bias_init, Real(0.002)) : cfg_.gyro_bias_init;
+  nz.yaw_psd = std::sqrt(imu_eff_.gyro_noise * imu_eff_.gyro_noise + bg * bg * kYawBankCorrTime_s);
+  return nz;
+}
+
+void Navigator::yaw_bank_on_range(int anchor_index, int tag_index, const UwbRange& range) {
+  const Mat3 c_lvl = quat_to_dcm(q_init_);
+  if (!gsf_.active()) {
+    if (!have_fix_ || track_count_ == 0) return;
+    // Seed at the newest fix (this range is part of it).
+    const TrackFix& fix = track_[(track_head_ + kTrackCapacity - 1) % kTrackCapacity];
+    const bool ground = site_.platform == Platform::kGround;
+    const Real pos_v = last_fix_sigma_z_m_ > Real(0) ? last_fix_sigma_z_m_ : (ground ? Real(0.2) : Real(1.0));
+    const Real vel_sigma = levelled_at_rest_ && !track_moving(range.t_us) ? Real(0.2) : cfg_.init_speed;
+    gsf_.start(fix.tag_pos_nav_m, c_lvl * lever(fix.tag_index), Real(0),
+               fix.sigma_h_m * std::sqrt(Real(0.5)) + Real(0.05), pos_v, std::fmax(vel_sigma, Real(0.2)));
+    return;
+  }
+  gsf_.propagate(static_cast<Real>(site_.gravity_mps2), yaw_bank_noise());
+  if (!gsf_.update_range(to_vec3(site_.anchors[anchor_index].pos_nav_m), c_lvl * lever(tag_index),
+                         static_cast<Real>(range.range_m), cfg_.uwb_sigma_m)) {
+    return;
+  }
+  if (gsf_.updates() >= kYawBankMinUpdates && gsf_.yaw_sigma() < cfg_.init_yaw_sigma) {
+    start_from_yaw_bank(range.t_us, cfg_.init_yaw_sigma);
+  }
+}
+
+void Navigator::start_from_yaw_bank(uint64_t t_us, Real max_yaw_sigma_rad) {
+  Vec3 pos, pos_sigma, vel, vel_sigma;
+  gsf_.mixture(pos, pos_sigma, vel, vel_sigma);
+  const Real yaw_sigma = std::fmin(std::fmax(gsf_.yaw_sigma(), Real(0.02)), max_yaw_sigma_rad);
+  start_filter_at(t_us, pos, pos_sigma, gsf_.yaw_mean(), yaw_sigma, vel, vel_sigma);
 }
 
 void Navigator::try_heading(uint64_t t_us) {
@@ -283,21 +387,28 @@ void Navigator::setup_height(Real origin_z_m) {
 
 void Navigator::start_filter(uint64_t t_us, const TrackFix& fix, Real yaw_rad, Real yaw_sigma_rad,
                              const Vec3& vel_nav_mps, Real vel_sigma_mps) {
-  NominalState x;
-  x.q_nav_body = quat_normalised(quat_mul(quat_from_yaw(yaw_rad), q_init_));
-  const Mat3 c = quat_to_dcm(x.q_nav_body);
+  const Mat3 c = quat_to_dcm(quat_normalised(quat_mul(quat_from_yaw(yaw_rad), q_init_)));
   const Vec3 lev = lever(fix.tag_index);
-  x.pos_nav_m = fix.tag_pos_nav_m - c * lev;
-  x.vel_nav_mps = vel_nav_mps;
-  x.bg_body_radps = bg_init_;
-  ErrVec sigma;
   // Heading uncertainty moves the origin by up to |lever| * yaw sigma.
   const Real lever_h = lev.head<2>().norm() * std::fmin(yaw_sigma_rad, Real(1));
   const Real pos_h = std::sqrt(Real(0.5) * fix.sigma_h_m * fix.sigma_h_m + lever_h * lever_h) + Real(0.05);
   const bool ground = site_.platform == Platform::kGround;
   const Real pos_v = last_fix_sigma_z_m_ > Real(0) ? last_fix_sigma_z_m_ : (ground ? Real(0.2) : Real(1.0));
-  const Real tilt = levelled_at_rest_ ? Real(0.01) : Real(0.05);
-  sigma << pos_h, pos_h, pos_v, vel_sigma_mps, vel_sigma_mps, Real(0.2), tilt, tilt, yaw_sigma_rad,
+  start_filter_at(t_us, fix.tag_pos_nav_m - c * lev, Vec3(pos_h, pos_h, pos_v), yaw_rad, yaw_sigma_rad, vel_nav_mps,
+                  Vec3(vel_sigma_mps, vel_sigma_mps, Real(0.2)));
+}
+
+void Navigator::start_filter_at(uint64_t t_us, const Vec3& pos_nav_m, const Vec3& pos_sigma_m, Real yaw_rad,
+                                Real yaw_sigma_rad, const Vec3& vel_nav_mps, const Vec3& vel_sigma_mps) {
+  NominalState x;
+  x.q_nav_body = quat_normalised(quat_mul(quat_from_yaw(yaw_rad), q_init_));
+  x.pos_nav_m = pos_nav_m;
+  x.vel_nav_mps = vel_nav_mps;
+  x.bg_body_radps = bg_init_;
+  ErrVec sigma;
+  const Real tilt = levelled_at_rest_ ? kTiltSigmaRest_rad : kTiltSigmaMoving_rad;
+  sigma << pos_sigma_m.x(), pos_sigma_m.y(), pos_sigma_m.z(), vel_sigma_mps.x(), vel_sigma_mps.y(),
+      vel_sigma_mps.z(), tilt, tilt, yaw_sigma_rad,
       cfg_.accel_bias_init, cfg_.accel_bias_init, cfg_.accel_bias_init,
       levelled_at_rest_ ? std::fmin(cfg_.gyro_bias_init, Real(0.002)) : cfg_.gyro_bias_init,
       levelled_at_rest_ ? std::fmin(cfg_.gyro_bias_init, Real(0.002)) : cfg_.gyro_bias_init,
@@ -309,6 +420,7 @@ void Navigator::start_filter(uint64_t t_us, const TrackFix& fix, Real yaw_rad, R
   running_since_us_ = t_us;
   last_constraint_us_ = t_state_us_;
   after_failure_ = false;
+  gsf_.reset();
   setup_height(x.pos_nav_m.z());
 }
 

@@ -18,9 +18,11 @@ set(CMAKE_TRY_COMPILE_TARGET_TYPE STATIC_LIBRARY)
 
 # Firmware code generation: picolibc headers/libraries, no exceptions or RTTI
 # anywhere in the image, one section per function/object so --gc-sections can
-# drop what the image does not reach, and a .su file per object (-fstack-usage)
-# for the stack analysis of scripts/footprint.sh.
-set(UWBNAV_ARM_COMMON_FLAGS "${UWBNAV_ARM_CPU_FLAGS} -specs=picolibc.specs -ffunction-sections -fdata-sections -fstack-usage -fcallgraph-info=su")
+# drop what the image does not reach, and per object a .su and a .ci file
+# (-fstack-usage, -fcallgraph-info=su) for the stack analysis (docs/footprint.md).
+# _DEFAULT_SOURCE: the same libc feature set as the host, where g++ on glibc
+# predefines _GNU_SOURCE (M_PI and friends stay visible under -std=c++17).
+set(UWBNAV_ARM_COMMON_FLAGS "${UWBNAV_ARM_CPU_FLAGS} -specs=picolibc.specs -D_DEFAULT_SOURCE -ffunction-sections -fdata-sections -fstack-usage -fcallgraph-info=su")
 set(CMAKE_C_FLAGS_INIT "${UWBNAV_ARM_COMMON_FLAGS}")
 set(CMAKE_CXX_FLAGS_INIT "${UWBNAV_ARM_COMMON_FLAGS} -fno-exceptions -fno-rtti -fno-threadsafe-statics")
 set(CMAKE_ASM_FLAGS_INIT "${UWBNAV_ARM_CPU_FLAGS}")

@@ -141,12 +141,17 @@ float GatingLayer::svm_p(const SvmModel* model, const Evidence& e, const RangeCo
 GatingLayer::Evidence GatingLayer::compute_evidence(const RangeContext& ctx, const Slot& slot) const {
   Evidence e;
   if (slot.has_prev && ctx.range.t_us > slot.prev_t_us && ctx.range.t_us - slot.prev_t_us <= max_dt_us_) {
-    const float dt_s = static_cast<float>(static_cast<double>(ctx.range.t_us - slot.prev_t_us) * 1e-6);
+    // Float only (no soft-double on the M4F): dt_us <= max_dt_us is exact in float below
+    // 2^24 us, the division by the exact 1e6 is correctly rounded.
+    const float dt_s = static_cast<float>(ctx.range.t_us - slot.prev_t_us) / 1e6F;
     e.delta_range_m = ctx.range.range_m - slot.prev_range_m;  // Δρ_k (eq. 3)
     e.range_rate_mps = e.delta_range_m / dt_s;                // v_uk (eq. 1)
   }
-  e.p_svm2 = svm_p(svm2_, e, ctx);
-  e.p_svm = svm_model_ == 1 ? svm_p(svm1_, e, ctx) : e.p_svm2;
+  // The SVM (the costliest evidence) runs only for the policies that read it; the default
+  // policy evaluates its coarse models itself, only when it uses them (decide_default).
+  if (policy_ == GatingPolicy::kSvm || policy_ == GatingPolicy::kDempsterShafer) {
+    e.p_svm = svm_p(svm_model_ == 1 ? svm1_ : svm2_, e, ctx);
+  }
   e.p_mc = consistency_p_nlos(e.delta_range_m, ctx.dist_since_prev_m, sigma_uwb_m(ctx));
   e.p_chan = channel_p_nlos(ctx.range.fp_power_dbm, ctx.range.rx_power_dbm, chan_lo_db_, chan_hi_db_, chan_p_max_);
   if (ctx.filter_ready && ctx.innovation_var_m2 > 0.0F) {
@@ -277,9 +282,13 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
   const bool have_innov = std::isfinite(p_innov);
   const bool coarse = !have_innov && !std::isfinite(e.p_chan);
   float p_coarse = kNaNf;
-  if (coarse) p_coarse = std::isfinite(e.p_svm2) ? e.p_svm2 : svm_p(svm1_, e, ctx);
+  if (coarse) {
+    p_coarse = svm_p(svm2_, e, ctx);
+    if (!std::isfinite(p_coarse)) p_coarse = svm_p(svm1_, e, ctx);
+  }
   const float evidence[4] = {p_coarse, coarse ? e.p_mc : kNaNf, e.p_chan, p_innov};
   const float r = ds_combine_all(evidence, 4);
+  d.p_svm = p_coarse;  // the SVM that ran (SVM2, else SVM1); NaN when the coarse models were not used
   d.p_fused = r;
   d.nlos = r > default_nlos_;
   // A gross outlier against a converged filter is rejected whatever the other evidence says.
@@ -387,7 +396,7 @@ GatingDecision GatingLayer::assess(const RangeContext& ctx) {
     case GatingPolicy::kRaim: d = decide_raim(ctx, si); break;
     case GatingPolicy::kDefault: d = decide_default(ctx, e, slot); break;
   }
-  d.p_svm = e.p_svm;
+  if (policy_ != GatingPolicy::kDefault) d.p_svm = e.p_svm;  // NaN where no SVM ran
   d.p_mc = e.p_mc;
 
   // This range becomes the pair's previous range (eq. 1/3) and its epoch entry.

@@ -82,8 +82,7 @@ class GatingLayer {
   struct Evidence {
     float range_rate_mps = kNaNf;  // v_uk, eq. 1
     float delta_range_m = kNaNf;   // Δρ_k, eq. 3
-    float p_svm = kNaNf;           // p1 of the selected model
-    float p_svm2 = kNaNf;          // p1 of SVM2 (default policy)
+    float p_svm = kNaNf;           // p1 of the selected model (policies svm and dempster-shafer only)
     float p_mc = kNaNf;            // p2, eq. 6
     float p_chan = kNaNf;          // channel evidence
     float z = kNaNf;               // |innovation| / sqrt(S) [-]

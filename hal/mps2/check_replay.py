@@ -105,7 +105,7 @@ def main():
         if not good:
             failures.append(what)
 
-    cycles = int(digest["cycles"]["cycles"])
+    cycles = int(digest["loop"]["cycles"])
     compare("cycles (outputs)", cycles, len(est), 0)
     compare("ranges reported", int(digest["ranges"]["reported"]), len(ranges), 0)
     n_ranges = max(len(ranges), 1)

@@ -42,6 +42,11 @@ def grouped(pairs):
     return sorted((fn, sorted(h)) for fn, h in out.items())
 
 
+def short(name, limit=90):
+    """Demangled name without template/argument noise beyond `limit` characters."""
+    return name if len(name) <= limit else name[:limit - 3] + "..."
+
+
 def kib(n):
     return f"{n:,} B ({n / KIB:.1f} KiB)"
 
@@ -246,10 +251,14 @@ def main():
         for name, n in prof.get("profile_components", []):
             L.append(f"| {name} | {100.0 * n / total:.1f} % | {int(mean_all * n / total):,} |")
         L.append("")
-        L.append("| function (self) | share | from |")
-        L.append("|---|---:|---|")
-        for name, n, owner in prof.get("profile_functions", [])[:15]:
-            L.append(f"| `{name}` | {100.0 * n / total:.1f} % | {owner} |")
+        L.append("Functions by own instructions; for library code, the callers that spent them (from the")
+        L.append("sampled LR, exact for leaf functions such as `memset` and the soft-float helpers):")
+        L.append("")
+        L.append("| function (self) | share | from | called from |")
+        L.append("|---|---:|---|---|")
+        for name, n, owner, by in prof.get("profile_functions", [])[:15]:
+            via = "; ".join(f"`{short(c)}` {100.0 * m / n:.0f} %" for c, m in by)
+            L.append(f"| `{short(name)}` | {100.0 * n / total:.1f} % | {owner} | {via} |")
         L.append("")
 
     L.append("## Float-only check (no soft-double on the M4F)")

@@ -412,42 +412,46 @@ def check(img, args):
         owner = img.owner(name)
         canonical = img.canonical(name)
         why = "; ".join(img.pulled_in_by(owner))
-        callers = sorted(f for f, cs in img.edges.items() if canonical in cs and "hal/mps2" not in img.owner(f))
+        # One caller per object file that calls it (the objects to fix), ours first.
+        by_object = {}
+        for f in sorted(f for f, cs in img.edges.items() if canonical in cs):
+            by_object.setdefault(img.owner(f), f)
+        callers = [by_object[o] for o in sorted(by_object, key=lambda o: ("/usr/lib/" in o, o))]
         if callers:
-            why += "; called by " + ", ".join(callers[:3]) + (" ..." if len(callers) > 3 else "")
+            why += "; called by " + ", ".join(callers[:5]) + (" ..." if len(callers) > 5 else "")
         if name in HEAP_SYMBOLS or NEW_RE.match(name):
             errors.append(f"heap: {name} is linked ({owner}; {why})")
         elif name in EXCEPTION_SYMBOLS:
             errors.append(f"exceptions: {name} is linked ({owner}; {why})")
         elif DELETE_RE.match(name) and "hal/mps2" not in owner:
             errors.append(f"heap: {name} comes from {owner}, not the board's trapping definition")
-    soft = soft_double_hot_path(img, args.estimator_lib)
+    soft = soft_double_hot_path(img, args.estimator_lib, args.roots)
     for fn, helper in soft:
         errors.append(f"soft-double in the estimator hot path: {fn} calls {helper}")
     if errors:
         mangled = sorted({w.strip(",;()") for e in errors for w in e.split() if w.startswith("_Z")})
         pretty = demangle(mangled, args.cxxfilt)
-        sys.stderr.write("image_analysis: uwbnav_mps2.elf violates the firmware rules:\n")
+        sys.stderr.write(f"image_analysis: {os.path.basename(args.elf)} violates the firmware rules:\n")
         for e in errors:
             for m in mangled:
                 e = e.replace(m, pretty.get(m, m))
             sys.stderr.write(f"  {e}\n")
         return 1
     print(f"image_analysis: no heap, no exceptions, no soft-double in the estimator hot path "
-          f"({len(estimator_hot_path(img, args.estimator_lib))} estimator functions)")
+          f"({len(estimator_hot_path(img, args.estimator_lib, args.roots))} estimator functions)")
     return 0
 
 
-def estimator_hot_path(img, estimator_lib):
+def estimator_hot_path(img, estimator_lib, root_prefixes=ESTIMATOR_ROOTS):
     """Estimator functions the per-sample entry points reach."""
     lib = os.path.basename(estimator_lib)
-    roots = [n for n in img.functions if n.startswith(ESTIMATOR_ROOTS)]
+    roots = [n for n in img.functions if n.startswith(tuple(root_prefixes))]
     return sorted(n for n in img.reachable(roots) if lib in img.owner(n))
 
 
-def soft_double_hot_path(img, estimator_lib):
+def soft_double_hot_path(img, estimator_lib, root_prefixes=ESTIMATOR_ROOTS):
     """(estimator hot-path function, soft-double symbol it reaches directly or via library code)."""
-    estimator_hot = estimator_hot_path(img, estimator_lib)
+    estimator_hot = estimator_hot_path(img, estimator_lib, root_prefixes)
     found = []
     for fn in estimator_hot:
         # Follow calls into code that is not ours (libm, libgcc) to catch doubles inside.
@@ -509,28 +513,41 @@ def flash_breakdown(img):
 
 
 def profile(img, digest_path):
-    """Flat profile from the profile image's sampled PCs: per function and per component."""
+    """Flat profile from the profile image's sampled (PC, LR) pairs: per function, per
+    component, and for library functions the callers (function holding the LR: exact
+    for leaf functions such as memset and the soft-float helpers)."""
     starts = sorted((addr, size, min(names)) for addr, names in img.aliases.items()
                     for size in [max(img.functions[n][1] for n in names)])
     keys = [s[0] for s in starts]
-    per_fn, total, period = {}, 0, 0
+
+    def function_at(addr):
+        addr &= ~1
+        i = bisect.bisect_right(keys, addr) - 1
+        return starts[i][2] if i >= 0 and addr < starts[i][0] + max(starts[i][1], 2) else "(unknown)"
+
+    per_fn, callers, total, period = {}, {}, 0, 0
     with open(digest_path) as f:
         for line in f:
             if line.startswith("profile samples="):
                 period = int(line.split("period_ticks=")[1])
             elif line.startswith("profile pc="):
-                pc, n = (int(x.split("=")[1]) for x in line.split()[1:3])
-                pc &= ~1
-                i = bisect.bisect_right(keys, pc) - 1
-                name = starts[i][2] if i >= 0 and pc < starts[i][0] + max(starts[i][1], 2) else "(unknown)"
+                fields = dict(x.split("=") for x in line.split()[1:])
+                n = int(fields["n"])
+                name = function_at(int(fields["pc"]))
                 per_fn[name] = per_fn.get(name, 0) + n
                 total += n
+                if name in img.functions and img.is_library(name):
+                    caller = function_at(int(fields["lr"]))
+                    if caller != name:
+                        callers.setdefault(name, {})
+                        callers[name][caller] = callers[name].get(caller, 0) + n
     comps = {}
     for name, n in per_fn.items():
         c = component(img, name) if name in img.functions else "(unknown)"
         comps[c] = comps.get(c, 0) + n
     top = sorted(per_fn.items(), key=lambda kv: -kv[1])[:20]
-    return total, period, top, sorted(comps.items(), key=lambda kv: -kv[1])
+    top_callers = {name: sorted(callers.get(name, {}).items(), key=lambda kv: -kv[1])[:3] for name, _ in top}
+    return total, period, top, sorted(comps.items(), key=lambda kv: -kv[1]), top_callers
 
 
 def sections(elf, size_tool):
@@ -596,11 +613,14 @@ def footprint(img, args):
         "soft_double_firmware_hot": [(pretty.get(n, n), c) for n, c in soft_fw_hot],
     }
     if args.profile:
-        total, period, top, comps = profile(img, args.profile)
-        pretty.update(demangle(sorted(n for n, _ in top), args.cxxfilt))
+        total, period, top, comps, top_callers = profile(img, args.profile)
+        names = {n for n, _ in top} | {c for cs in top_callers.values() for c, _ in cs}
+        pretty.update(demangle(sorted(names), args.cxxfilt))
         result["profile_samples"] = total
         result["profile_period_ticks"] = period
-        result["profile_functions"] = [(pretty.get(n, n), c, os.path.basename(img.owner(n))) for n, c in top]
+        result["profile_functions"] = [
+            (pretty.get(n, n), c, os.path.basename(img.owner(n)),
+             [(pretty.get(k, k), m) for k, m in top_callers.get(n, [])]) for n, c in top]
         result["profile_components"] = comps
     json.dump(result, sys.stdout, indent=1)
     sys.stdout.write("\n")
@@ -613,6 +633,8 @@ def main():
     p.add_argument("--elf", required=True)
     p.add_argument("--map", required=True)
     p.add_argument("--estimator-lib", required=True, help="libuwbnav_estimator.a (ownership of estimator code)")
+    p.add_argument("--roots", nargs="+", default=list(ESTIMATOR_ROOTS),
+                   help="mangled-name prefixes of the hot-path entry points (default: Navigator on_imu/on_range/output)")
     p.add_argument("--callgraph-dir", required=True, help="build tree holding the .ci files")
     p.add_argument("--readelf", default="arm-none-eabi-readelf")
     p.add_argument("--objdump", default="arm-none-eabi-objdump")

@@ -1,8 +1,9 @@
 // Firmware image entry for the MPS2-AN386 board under qemu-system-arm: replays
 // the recording in flash through App::tick() on the 10 ms grid exactly as the
 // host lockstep replay does (tools/eval/replay.cpp), measures each cycle with
-// the SysTick counter, prints a digest over semihosting (format in
-// docs/footprint.md) and exits 0 (1: init failed, 2: stack overflow). The
+// the SysTick counter, prints a digest over semihosting ("key a=b ..." lines,
+// read by check_replay.py and footprint_report.py) and exits 0 (1: init
+// failed, 2: stack overflow; 3 and 4 from startup.cpp). The
 // profile build (UWBNAV_MPS2_PROFILE) prints a sampled PC histogram instead of
 // the per-cycle cost.
 #include <cstdint>
@@ -49,11 +50,16 @@ class DigestObserver final : public AppObserver {
     const auto s = static_cast<uint32_t>(o.status);
     if (s < 4) ++status_cycles_[s];
     last_ = o;
-    if (o.t_us % kTrajectoryPeriodUs == 0) {
-      out_.str("traj t_us=").u64(o.t_us).str(" status=").u64(s);
-      out_.str(" pos_m=").fixed(o.pos_nav_m.x, 4).str(",").fixed(o.pos_nav_m.y, 4).str(",").fixed(o.pos_nav_m.z, 4);
-      out_.endl();
-    }
+    if (o.t_us % kTrajectoryPeriodUs == 0) trajectory_due_ = true;
+  }
+
+  // Prints the 1 Hz trajectory line of the last output, outside the measured tick.
+  void print_trajectory() {
+    if (!trajectory_due_) return;
+    trajectory_due_ = false;
+    out_.str("traj t_us=").u64(last_.t_us).str(" status=").u64(static_cast<uint32_t>(last_.status));
+    out_.str(" pos_m=").fixed(last_.pos_nav_m.x, 4).str(",").fixed(last_.pos_nav_m.y, 4);
+    out_.str(",").fixed(last_.pos_nav_m.z, 4).endl();
   }
 
   uint32_t take_cycle_ranges() {
@@ -72,6 +78,7 @@ class DigestObserver final : public AppObserver {
  private:
   TextOut& out_;
   uint32_t ranges_this_cycle_ = 0;
+  bool trajectory_due_ = false;
 };
 
 TextOut g_out;
@@ -163,6 +170,7 @@ int run() {
     bin.ticks_sum += ticks;
     if (ticks > bin.ticks_max) bin.ticks_max = ticks;
     ++cycles;
+    g_observer.print_trajectory();
     hal::CanFrame f;
     while (ok(g_can.pop_sent(f))) ++can_frames;
     if (g_imu.finished() && g_uwb.finished()) break;
@@ -175,7 +183,7 @@ int run() {
   const AppStats& st = g_app.stats();
   const NavDiagnostics& diag = g_app.navigator().diagnostics();
   const NavOutput& last = g_observer.last_;
-  g_out.str("cycles=").u64(cycles).str(" outputs=").u64(g_observer.outputs_).endl();
+  g_out.str("loop cycles=").u64(cycles).str(" outputs=").u64(g_observer.outputs_).endl();
   g_out.str("imu received=").u64(st.imu.received).str(" accepted=").u64(st.imu.accepted);
   g_out.str(" rejected=").u64(st.imu.rejected_total()).endl();
   g_out.str("uwb received=").u64(st.uwb.received).str(" accepted=").u64(st.uwb.accepted);

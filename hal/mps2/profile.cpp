@@ -3,7 +3,7 @@
 
 #include <cstddef>
 
-extern "C" void profile_sample(uint32_t pc);
+extern "C" void profile_sample(uint32_t pc, uint32_t lr);
 extern "C" void SysTick_Handler();
 
 namespace uwbnav::mps2 {
@@ -11,8 +11,11 @@ namespace {
 
 constexpr size_t kSlots = 16384;  // distinct PCs kept (open addressing); more are counted as dropped
 
+// One (interrupted PC, interrupted LR) pair: the LR names the caller of a leaf
+// function (memset, soft-float helpers) that does not save it.
 struct Slot {
   uint32_t pc;
+  uint32_t lr;
   uint32_t count;
 };
 
@@ -39,20 +42,21 @@ void profile_report(TextOut& out) {
   out.str(" period_ticks=").u64(kProfilePeriodTicks).endl();
   for (const Slot& s : g_slots) {
     if (s.count == 0) continue;
-    out.str("profile pc=").u64(s.pc).str(" n=").u64(s.count).endl();
+    out.str("profile pc=").u64(s.pc).str(" lr=").u64(s.lr).str(" n=").u64(s.count).endl();
   }
 }
 
 }  // namespace uwbnav::mps2
 
-extern "C" void profile_sample(uint32_t pc) {
+extern "C" void profile_sample(uint32_t pc, uint32_t lr) {
   using uwbnav::mps2::g_slots;
   using uwbnav::mps2::kSlots;
   ++uwbnav::mps2::g_samples;
-  size_t i = (pc >> 1) * 2654435761U % kSlots;
+  size_t i = ((pc >> 1) * 2654435761U + lr) % kSlots;
   for (size_t probe = 0; probe < 64; ++probe, i = (i + 1) % kSlots) {
-    if (g_slots[i].count == 0 || g_slots[i].pc == pc) {
+    if (g_slots[i].count == 0 || (g_slots[i].pc == pc && g_slots[i].lr == lr)) {
       g_slots[i].pc = pc;
+      g_slots[i].lr = lr;
       ++g_slots[i].count;
       return;
     }
@@ -60,10 +64,12 @@ extern "C" void profile_sample(uint32_t pc) {
   ++uwbnav::mps2::g_dropped;
 }
 
-// All code runs on the main stack: the stacked PC is word 6 of the exception frame.
+// All code runs on the main stack: the stacked LR and PC are words 5 and 6 of
+// the exception frame.
 extern "C" __attribute__((naked)) void SysTick_Handler() {
   __asm__ volatile(
-      "mrs r0, msp\n\t"
-      "ldr r0, [r0, #24]\n\t"
+      "mrs r2, msp\n\t"
+      "ldr r0, [r2, #24]\n\t"
+      "ldr r1, [r2, #20]\n\t"
       "b profile_sample");
 }

@@ -1,7 +1,7 @@
 // Sampling profiler of the MPS2 image (profile build only): the SysTick
-// exception samples the interrupted PC every kProfilePeriodTicks; the counts
-// go out over semihosting for image_analysis/footprint_report to attribute to
-// functions.
+// exception samples the interrupted PC and LR every kProfilePeriodTicks; the
+// counts go out over semihosting for image_analysis/footprint_report to
+// attribute to functions (and leaf library time to its callers).
 #pragma once
 
 #include <cstdint>
@@ -15,7 +15,7 @@ constexpr uint32_t kProfilePeriodTicks = 1009;
 
 // Starts SysTick with its interrupt at kProfilePeriodTicks (replaces CycleCounter::start).
 void profile_start();
-// Stops sampling and prints "profile ..." lines: totals, then one line per sampled PC.
+// Stops sampling and prints "profile ..." lines: totals, then one line per sampled (PC, LR).
 void profile_report(TextOut& out);
 
 }  // namespace uwbnav::mps2

@@ -270,7 +270,7 @@ TEST(GatingLayer, DefaultInnovationSupersedesCoarseModels) {
   // (innovation 0, e.g. the previous range was the NLOS one): LOS.
   EXPECT_TRUE(g.assess(ctx_at(0, 0, 20.0F, 0.0F)).use);
   const GatingDecision d = g.assess(ctx_at(0, 80000, 21.5F, 0.0F));
-  EXPECT_GT(d.p_svm, 0.5F);
+  EXPECT_TRUE(std::isnan(d.p_svm));  // with a prediction the SVM does not run
   EXPECT_FLOAT_EQ(d.p_mc, 0.9F);
   EXPECT_FALSE(d.nlos);
   // Without a converged filter the coarse models decide.
@@ -280,7 +280,23 @@ TEST(GatingLayer, DefaultInnovationSupersedesCoarseModels) {
   RangeContext c = ctx_at(0, 80000, 21.5F, 0.0F, false);
   c.speed_mps = kNaNf;       // not running yet: no speed, no travelled distance
   c.dist_since_prev_m = kNaNf;
-  EXPECT_TRUE(g2.assess(c).nlos);  // SVM1 on the range rate alone
+  const GatingDecision coarse = g2.assess(c);
+  EXPECT_TRUE(coarse.nlos);  // SVM1 on the range rate alone
+  EXPECT_GT(coarse.p_svm, 0.5F);  // reported: it ran
+}
+
+TEST(GatingLayer, SvmRunsOnlyForPoliciesThatUseIt) {
+  // p_svm is NaN ("that model did not run") unless the policy reads the SVM.
+  for (GatingPolicy policy : {GatingPolicy::kNone, GatingPolicy::kInnovation, GatingPolicy::kConsistency,
+                              GatingPolicy::kResidualInflation, GatingPolicy::kRaim, GatingPolicy::kDefault,
+                              GatingPolicy::kSvm, GatingPolicy::kDempsterShafer}) {
+    GatingLayer g;
+    ASSERT_TRUE(ok(g.configure(make_site(), params_with(policy))));
+    (void)g.assess(ctx_at(0, 0, 20.0F, 0.0F));
+    const GatingDecision d = g.assess(ctx_at(0, 80000, 21.5F, 0.0F));
+    const bool uses_svm = policy == GatingPolicy::kSvm || policy == GatingPolicy::kDempsterShafer;
+    EXPECT_EQ(std::isfinite(d.p_svm), uses_svm) << "policy " << static_cast<int>(policy);
+  }
 }
 
 TEST(GatingLayer, DefaultRejectsGrossOutlierOfUntrustedFilter) {

@@ -31,7 +31,9 @@ struct Problem {
   svm_problem prob{};
 };
 
-void scale_sample(const SvmModel& scaling, const SvmSample& s, double* out) { svm_scale(scaling, s.features, out); }
+void scale_sample(const SvmModel& scaling, const SvmSample& s, double* out) {
+  svm_scale_double(scaling, s.features, out);
+}
 
 std::unique_ptr<Problem> make_problem(const std::vector<SvmSample>& samples, const SvmModel& scaling) {
   auto p = std::make_unique<Problem>();
@@ -72,7 +74,8 @@ svm_parameter make_param(double c, double gamma, bool probability) {
   return param;
 }
 
-// libsvm model -> embedded model (scaling copied from `scaling`).
+// libsvm model -> embedded model (scaling copied from `scaling`): the double model
+// rounded to float (round to nearest), support vectors stored feature-major.
 bool to_embedded(const svm_model* lm, const SvmModel& scaling, size_t capacity, SvmModel& out) {
   if (svm_get_nr_class(lm) != 2 || svm_check_probability_model(lm) == 0) return false;
   const int nsv = svm_get_nr_sv(lm);
@@ -87,19 +90,21 @@ bool to_embedded(const svm_model* lm, const SvmModel& scaling, size_t capacity, 
   int labels[2] = {0, 0};
   svm_get_labels(lm, labels);
   out.first_label_nlos = labels[0] == 1 ? 1 : 0;
-  out.gamma = lm->param.gamma;
-  out.rho = lm->rho[0];
-  out.prob_a = lm->probA[0];
-  out.prob_b = lm->probB[0];
+  out.gamma = static_cast<float>(lm->param.gamma);
+  out.rho = static_cast<float>(lm->rho[0]);
+  out.prob_a = static_cast<float>(lm->probA[0]);
+  out.prob_b = static_cast<float>(lm->probB[0]);
   for (size_t f = 0; f < kSvmMaxFeatures; ++f) {
     out.scale_min[f] = scaling.scale_min[f];
     out.scale_max[f] = scaling.scale_max[f];
   }
   for (int i = 0; i < nsv; ++i) {
     for (const svm_node* n = lm->SV[i]; n->index != -1; ++n) {
-      if (n->index >= 1 && static_cast<size_t>(n->index) <= out.num_features) out.sv[i][n->index - 1] = n->value;
+      if (n->index >= 1 && static_cast<size_t>(n->index) <= out.num_features) {
+        out.sv[n->index - 1][i] = static_cast<float>(n->value);
+      }
     }
-    out.coef[i] = lm->sv_coef[0][i];
+    out.coef[i] = static_cast<float>(lm->sv_coef[0][i]);
   }
   out.crc32 = svm_model_crc32(out);
   return true;
@@ -135,14 +140,6 @@ std::vector<int> assign_folds(const std::vector<SvmSample>& samples, int folds, 
     for (size_t k = 0; k < idx.size(); ++k) fold[idx[k]] = static_cast<int>(k % static_cast<size_t>(folds));
   }
   return fold;
-}
-
-std::string format_double(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.17g", v);
-  std::string s = buf;
-  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
-  return s;
 }
 
 std::string format_float(float v) {
@@ -185,7 +182,7 @@ std::vector<SvmSample> wilson_edit(const std::vector<SvmSample>& pool, SvmFeatur
   fit_scaling(pool, set, scaling);
   const size_t nf = scaling.num_features;
   std::vector<double> x(pool.size() * nf);
-  for (size_t i = 0; i < pool.size(); ++i) svm_scale(scaling, pool[i].features, &x[i * nf]);
+  for (size_t i = 0; i < pool.size(); ++i) svm_scale_double(scaling, pool[i].features, &x[i * nf]);
   std::vector<SvmSample> kept;
   std::vector<std::pair<double, int>> d(pool.size());
   for (size_t i = 0; i < pool.size(); ++i) {
@@ -280,7 +277,7 @@ double validate(const svm_model* lm, const SvmModel& scaling, const std::vector<
   if (dec_out != nullptr) dec_out->assign(val.size(), 0.0);
   for (size_t i = 0; i < val.size(); ++i) {
     double x[kSvmMaxFeatures] = {};
-    svm_scale(scaling, val[i].features, x);
+    svm_scale_double(scaling, val[i].features, x);
     svm_node nodes[kSvmMaxFeatures + 1];
     for (size_t f = 0; f < scaling.num_features; ++f) nodes[f] = svm_node{static_cast<int>(f + 1), x[f]};
     nodes[scaling.num_features].index = -1;
@@ -311,6 +308,15 @@ std::vector<SvmSample> stratified_subsample(const std::vector<SvmSample>& sample
   out.reserve(keep.size());
   for (size_t i : keep) out.push_back(samples[i]);
   return out;
+}
+
+void svm_scale_double(const SvmModel& scaling, const float* raw, double* scaled) {
+  for (size_t f = 0; f < scaling.num_features; ++f) {
+    const double lo = static_cast<double>(scaling.scale_min[f]);
+    const double hi = static_cast<double>(scaling.scale_max[f]);
+    // svm-scale: lower + (upper - lower) * (x - min) / (max - min), lower -1, upper +1.
+    scaled[f] = hi <= lo ? 0.0 : -1.0 + 2.0 * (static_cast<double>(raw[f]) - lo) / (hi - lo);
+  }
 }
 
 void fit_scaling(const std::vector<SvmSample>& train, SvmFeatureSet set, SvmModel& scaling) {
@@ -449,7 +455,11 @@ Status train_edited(const std::vector<SvmSample>& samples, const SvmTrainOptions
   }
   std::vector<int> is_label0(val.size());
   for (size_t i = 0; i < val.size(); ++i) is_label0[i] = (val[i].label != 0) == (model.first_label_nlos != 0) ? 1 : 0;
-  fit_platt(dec, is_label0, &model.prob_a, &model.prob_b);
+  double prob_a = 0.0;
+  double prob_b = 0.0;
+  fit_platt(dec, is_label0, &prob_a, &prob_b);
+  model.prob_a = static_cast<float>(prob_a);
+  model.prob_b = static_cast<float>(prob_b);
   model.crc32 = svm_model_crc32(model);
   return Status::kOk;
 }
@@ -550,7 +560,8 @@ std::string export_models_cpp(const std::vector<SvmModel>& models, const std::ve
                               const std::vector<SvmTrainReport>& reports, const std::string& command_line) {
   std::ostringstream o;
   o << "// GENERATED by `uwbnav train-svm` (tools/eval/svm_train.cpp) — do not edit.\n";
-  o << "// Committed default NLOS SVM models of the embedded evaluator (estimator/nlos/svm_model.hpp).\n";
+  o << "// Committed default NLOS SVM models of the embedded evaluator (estimator/nlos/svm_model.hpp):\n";
+  o << "// libsvm's double models rounded to float (SvmModel version " << kSvmModelVersion << ").\n";
   o << "// Command: " << command_line << "\n";
   for (size_t m = 0; m < models.size(); ++m) {
     const SvmTrainReport& r = reports[m];
@@ -572,22 +583,22 @@ std::string export_models_cpp(const std::vector<SvmModel>& models, const std::ve
     o << "    " << static_cast<int>(s.num_features) << ",  // num_features\n";
     o << "    " << s.num_sv << ",  // num_sv\n";
     o << "    " << static_cast<int>(s.first_label_nlos) << ",  // first_label_nlos\n";
-    o << "    " << format_double(s.gamma) << ",  // gamma\n";
-    o << "    " << format_double(s.rho) << ",  // rho\n";
-    o << "    " << format_double(s.prob_a) << ",  // prob_a\n";
-    o << "    " << format_double(s.prob_b) << ",  // prob_b\n";
+    o << "    " << format_float(s.gamma) << ",  // gamma\n";
+    o << "    " << format_float(s.rho) << ",  // rho\n";
+    o << "    " << format_float(s.prob_a) << ",  // prob_a\n";
+    o << "    " << format_float(s.prob_b) << ",  // prob_b\n";
     o << "    {";
     for (size_t f = 0; f < s.num_features; ++f) o << (f ? ", " : "") << format_float(s.scale_min[f]);
     o << "},  // scale_min\n    {";
     for (size_t f = 0; f < s.num_features; ++f) o << (f ? ", " : "") << format_float(s.scale_max[f]);
     o << "},  // scale_max\n    {\n";
-    for (size_t i = 0; i < s.num_sv; ++i) {
-      o << "        {";
-      for (size_t f = 0; f < s.num_features; ++f) o << (f ? ", " : "") << format_double(s.sv[i][f]);
-      o << "},\n";
+    for (size_t f = 0; f < s.num_features; ++f) {
+      o << "        {  // sv feature " << f << "\n";
+      for (size_t i = 0; i < s.num_sv; ++i) o << "            " << format_float(s.sv[f][i]) << ",\n";
+      o << "        },\n";
     }
     o << "    },\n    {\n";
-    for (size_t i = 0; i < s.num_sv; ++i) o << "        " << format_double(s.coef[i]) << ",\n";
+    for (size_t i = 0; i < s.num_sv; ++i) o << "        " << format_float(s.coef[i]) << ",\n";
     char crc[32];
     std::snprintf(crc, sizeof(crc), "0x%08" PRIX32 "U", s.crc32);
     o << "    },\n    " << crc << ",  // crc32\n};\n";

@@ -48,6 +48,10 @@ struct SvmTrainReport {
   int capacity_retries = 0;       // retrains with a smaller training set
 };
 
+// svm-scale scaling in double (host, training and libsvm reference): the libsvm
+// problem is built from these values; the embedded svm_scale computes it in float.
+void svm_scale_double(const SvmModel& scaling, const float* raw, double* scaled);
+
 // Scaling (min/max of `train` -> [-1, 1]) into a model (only scale_min/max/num_features/feature_set set).
 void fit_scaling(const std::vector<SvmSample>& train, SvmFeatureSet set, SvmModel& scaling);
 
