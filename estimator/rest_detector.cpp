@@ -33,7 +33,9 @@ void RestDetector::add(uint64_t t_us, const Vec3& accel_body_mps2, const Vec3& g
 void RestDetector::evaluate() {
   const size_t newest = (head_ + kCapacity - 1) % kCapacity;
   const uint64_t t_end = t_us_[newest];
-  const uint64_t window_us = static_cast<uint64_t>(window_s_ * Real(1e6));
+  // Via uint32 (a single VCVT on an FPU; the window is at most seconds): a
+  // direct float -> uint64 conversion is a soft-double libgcc call on Cortex-M.
+  const uint64_t window_us = static_cast<uint32_t>(window_s_ * Real(1e6));
   Vec3 a_sum = Vec3::Zero();
   Vec3 g_sum = Vec3::Zero();
   Real n_sum = Real(0);

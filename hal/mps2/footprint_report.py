@@ -167,8 +167,11 @@ def main():
     L.append("## Stack")
     L.append("")
     L.append(f"- Worst case: **{stack_worst:,} B** = deepest call chain from `Reset_Handler` "
-             f"({a['stack_main_path_bytes']:,} B) + a fault taken at its deepest point "
-             f"({a['stack_exception_bytes']:,} B: 104 B exception frame with FPU context + the handler).")
+             f"({a['stack_main_path_bytes']:,} B) + the {a['stack_exception_bytes']} B exception frame "
+             "(with FPU context) a fault stacks at its deepest point; the fault handler resets SP and "
+             "reports on a fresh stack. The image has no interrupts.")
+    L.append("- Layout: the stack sits at the bottom of RAM, so an overflow faults (exit code 3) instead "
+             "of overwriting `.data`/`.bss`.")
     L.append(f"- Deepest chain below `App::tick()`: {a['stack_tick_bytes']:,} B; below `App::init()`: "
              f"{a['stack_init_bytes']:,} B.")
     if stack:
@@ -251,8 +254,9 @@ def main():
         for name, n in prof.get("profile_components", []):
             L.append(f"| {name} | {100.0 * n / total:.1f} % | {int(mean_all * n / total):,} |")
         L.append("")
-        L.append("Functions by own instructions; for library code, the callers that spent them (from the")
-        L.append("sampled LR, exact for leaf functions such as `memset` and the soft-float helpers):")
+        L.append("Functions by own instructions; for library code, the callers that spent them, from the")
+        L.append("sampled LR: right for leaf functions that keep LR (`memset`, `memcpy`); `(unknown)` or the")
+        L.append("library itself where a helper reuses LR as a scratch register (the double-precision ones do):")
         L.append("")
         L.append("| function (self) | share | from | called from |")
         L.append("|---|---:|---|---|")
@@ -302,8 +306,9 @@ def main():
     L.append("scripts/footprint.sh                                  # regenerates this file")
     L.append("```")
     L.append("")
-    L.append("Exit codes of the image: 0 digest complete; 1 site or `App::init()` rejected; 2 stack")
-    L.append("overflow (paint at the stack bottom overwritten); 3 fault exception; 4 `operator delete` called.")
+    L.append("Exit codes of the image: 0 digest complete; 1 site or `App::init()` rejected; 2 the whole")
+    L.append("reserved stack was used (paint at its bottom gone); 3 fault exception (including a stack")
+    L.append("overflow, which runs below RAM); 4 `operator delete` called.")
     L.append("")
 
     with open(args.out, "w") as f:

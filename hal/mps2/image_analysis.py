@@ -18,7 +18,8 @@ linked image (bl/blx/b.w to symbols; blx/bx to a register is an indirect call,
 resolved conservatively to every address-taken function); frame sizes come from
 GCC's -fcallgraph-info=su (.ci files) for code compiled here and from the
 prologue (push/vpush/sub sp) for library code. The stack bound is the deepest
-path, plus one exception frame with FPU context for a fault at that point.
+path plus one exception frame with FPU context stacked by a fault at that
+point (the fault handler itself restarts on a fresh stack).
 """
 import argparse
 import bisect
@@ -514,8 +515,9 @@ def flash_breakdown(img):
 
 def profile(img, digest_path):
     """Flat profile from the profile image's sampled (PC, LR) pairs: per function, per
-    component, and for library functions the callers (function holding the LR: exact
-    for leaf functions such as memset and the soft-float helpers)."""
+    component, and for library functions the callers (the function holding the LR:
+    right for leaf functions that keep LR, such as memset; meaningless where LR is
+    reused as a scratch register)."""
     starts = sorted((addr, size, min(names)) for addr, names in img.aliases.items()
                     for size in [max(img.functions[n][1] for n in names)])
     keys = [s[0] for s in starts]
@@ -523,7 +525,11 @@ def profile(img, digest_path):
     def function_at(addr):
         addr &= ~1
         i = bisect.bisect_right(keys, addr) - 1
-        return starts[i][2] if i >= 0 and addr < starts[i][0] + max(starts[i][1], 2) else "(unknown)"
+        if i < 0:
+            return "(unknown)"
+        # Assembly helpers (libgcc) carry size 0: they extend to the next symbol.
+        end = starts[i][0] + starts[i][1] if starts[i][1] else (keys[i + 1] if i + 1 < len(keys) else addr + 1)
+        return starts[i][2] if addr < end else "(unknown)"
 
     per_fn, callers, total, period = {}, {}, 0, 0
     with open(digest_path) as f:
@@ -593,9 +599,10 @@ def footprint(img, args):
         "flash_by_component": flash_breakdown(img),
         "ram_static_bytes": ram_static,
         "stack_reserved_bytes": sec.get(".stack", 0),
-        "stack_worst_bytes": depth + EXCEPTION_FRAME_BYTES + fault_depth,
+        "stack_worst_bytes": depth + EXCEPTION_FRAME_BYTES,
         "stack_main_path_bytes": depth,
-        "stack_exception_bytes": EXCEPTION_FRAME_BYTES + fault_depth,
+        "stack_exception_bytes": EXCEPTION_FRAME_BYTES,
+        "stack_fault_handler_bytes": fault_depth,
         "stack_tick_bytes": tick_depth,
         "stack_init_bytes": init_depth,
         "stack_path": [(pretty.get(n, n), img.frame(n)) for n in path],

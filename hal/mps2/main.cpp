@@ -3,7 +3,7 @@
 // host lockstep replay does (tools/eval/replay.cpp), measures each cycle with
 // the SysTick counter, prints a digest over semihosting ("key a=b ..." lines,
 // read by check_replay.py and footprint_report.py) and exits 0 (1: init
-// failed, 2: stack overflow; 3 and 4 from startup.cpp). The
+// failed, 2: stack fully used; 3 and 4 from startup.cpp). The
 // profile build (UWBNAV_MPS2_PROFILE) prints a sampled PC histogram instead of
 // the per-cycle cost.
 #include <cstdint>
@@ -215,7 +215,7 @@ int run() {
   g_out.str(" sizeof_gating_layer=").u64(sizeof(GatingLayer)).str(" sizeof_console=").u64(sizeof(Console)).endl();
   g_out.str("stack used_bytes=").u64(stack_used).str(" reserved_bytes=").u64(stack_size_bytes()).endl();
   if (stack_used >= stack_size_bytes()) {
-    g_out.str("error: stack overflow (paint at the stack bottom overwritten)").endl();
+    g_out.str("error: the whole reserved stack was used (paint at its bottom gone)").endl();
     return 2;
   }
   g_out.str("end ok").endl();

@@ -31,6 +31,7 @@ void _set_tls(void* tls);  // picolibc: thread pointer for __aeabi_read_tp
 int main();
 [[noreturn]] void Reset_Handler();
 [[noreturn]] void Fault_Handler();
+[[noreturn]] void Fault_Report();
 [[noreturn]] void Unexpected_Handler();
 // The profile build (hal/mps2/profile.cpp) provides its own.
 [[noreturn]] void SysTick_Handler() __attribute__((weak, alias("Unexpected_Handler")));
@@ -108,7 +109,15 @@ extern "C" void Reset_Handler() {
   uwbnav::mps2::semihost_exit(static_cast<uint32_t>(main()));
 }
 
-extern "C" void Fault_Handler() {
+// A fault may come from a stack overflow (SP below RAM): report on a fresh stack.
+extern "C" __attribute__((naked)) void Fault_Handler() {
+  __asm__ volatile(
+      "ldr r0, =__stack_top\n\t"
+      "mov sp, r0\n\t"
+      "b Fault_Report");
+}
+
+extern "C" void Fault_Report() {
   uwbnav::mps2::semihost_write0("mps2: fault exception (HardFault/MemManage/BusFault/UsageFault/NMI)\n");
   uwbnav::mps2::semihost_exit(3);
 }
