@@ -11,6 +11,7 @@ RunSummary summarise(const dataset::Recording& rec, const ReplayResult& result) 
   s.has_truth = !rec.truth.empty();
   s.ranges_used = result.ranges_used;
   s.ranges_rejected = result.ranges_rejected;
+  s.input = result.stats;
   s.imu_rejected = result.stats.imu.rejected_total();
   s.uwb_rejected = result.stats.uwb.rejected_total();
   s.cycles = result.cycles;
@@ -57,6 +58,14 @@ void print_summary(std::FILE* f, const RunSummary& s) {
   std::fprintf(f, "input frames rejected by validation: IMU %llu, UWB %llu; filter resets %u, re-inits %u\n",
                static_cast<unsigned long long>(s.imu_rejected), static_cast<unsigned long long>(s.uwb_rejected),
                s.resets, s.reinits);
+  for (const auto* src : {&s.input.imu, &s.input.uwb}) {
+    if (src->rejected_total() == 0) continue;
+    std::fprintf(f, "  %s rejects:", src == &s.input.imu ? "IMU" : "UWB");
+    for (uint32_t r = 0; r < kNumRejectReasons; ++r) {
+      if (src->rejected[r] > 0) std::fprintf(f, " %s %u", reject_reason_name(static_cast<RejectReason>(r)), src->rejected[r]);
+    }
+    std::fprintf(f, "\n");
+  }
   std::fprintf(f, "firmware cycles %llu in %.3f s wall (%.0f cycles/s)\n", static_cast<unsigned long long>(s.cycles),
                s.wall_s, s.wall_s > 0 ? static_cast<double>(s.cycles) / s.wall_s : 0.0);
 }

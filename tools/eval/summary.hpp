@@ -19,6 +19,7 @@ struct RunSummary {
   uint64_t ranges_used = 0;
   uint64_t ranges_rejected = 0;
   uint64_t ranges_nlos_labelled = 0;   // truth labels (evaluation only)
+  AppStats input;                      // validation counters per source and reason
   uint64_t imu_rejected = 0;
   uint64_t uwb_rejected = 0;
   uint64_t cycles = 0;
