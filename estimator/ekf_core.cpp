@@ -28,7 +28,6 @@ constexpr int BG = ErrIdx::kBg;
 EkfCore::EkfCore() {
   p_.setIdentity();
   c_nav_body_.setIdentity();
-  phi_p_.setZero();
   u_.setZero();
 }
 
@@ -177,8 +176,17 @@ bool EkfCore::sanitise(bool symmetrise) {
       p_(i, i) = kFloorVar[blk];
     }
   }
-  // Symmetrise (predict accumulates tiny asymmetries from the block products).
-  if (symmetrise) p_ = (Real(0.5) * (p_ + p_.transpose())).eval();
+  // Symmetrise (predict accumulates tiny asymmetries from the block products),
+  // in place: each off-diagonal pair is read before either element is written.
+  if (symmetrise) {
+    for (int r = 0; r < kN; ++r) {
+      for (int c = r + 1; c < kN; ++c) {
+        const Real m = Real(0.5) * (p_(r, c) + p_(c, r));
+        p_(r, c) = m;
+        p_(c, r) = m;
+      }
+    }
+  }
   return true;
 }
 

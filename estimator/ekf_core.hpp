@@ -87,8 +87,7 @@ class EkfCore {
   NominalState x_;
   ErrCov p_;
   Mat3 c_nav_body_;
-  // Scratch (members, not function statics).
-  ErrCov phi_p_;  // Phi * P (block rows)
+  // Scratch (a member, not a function static).
   ErrVec u_;      // P H^T
   Real hph_ = Real(0);  // H P H^T of the prepared measurement
 };

@@ -12,7 +12,9 @@
 
 namespace uwbnav {
 
-constexpr size_t kLsMaxRanges = kMaxAnchors * kMaxTags;
+// One epoch holds at most one range per anchor (callers solve per tag: the
+// initial fix, RAIM, the LS-UWB baseline), so the capacity is the anchor table's.
+constexpr size_t kLsMaxRanges = kMaxAnchors;
 
 struct LsRange {
   Vec3f anchor_pos_nav_m;  // anchor antenna [m]

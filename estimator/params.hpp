@@ -31,7 +31,8 @@ struct ParamDef {
 
 constexpr size_t kNumParams = static_cast<size_t>(ParamId::kCount);
 
-constexpr ParamDef kParamDefs[kNumParams] = {
+// inline: one copy in the image, not one per translation unit that reads it.
+inline constexpr ParamDef kParamDefs[kNumParams] = {
 #define X(e, id, name, unit, def, lo, hi, doc) {ParamId::e, id, name, unit, def, lo, hi, doc},
 #include "estimator/params_table.inc"
 #undef X

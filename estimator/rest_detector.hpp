@@ -34,7 +34,12 @@ class RestDetector {
 
   Vec3 accel_[kCapacity];
   Vec3 gyro_[kCapacity];
-  uint64_t t_us_[kCapacity] = {};
+  // Low 32 bits of the sample times [us]: evaluate() sums the gaps between
+  // neighbours, each exact modulo 2^32 because add() restarts the ring after a
+  // gap of kMaxGapUs or more (half the RAM of full timestamps).
+  static constexpr uint64_t kMaxGapUs = 0x80000000U;
+  uint32_t t_lo_us_[kCapacity] = {};
+  uint64_t newest_t_us_ = 0;
   size_t head_ = 0;   // next write index
   size_t count_ = 0;
   Real window_s_ = Real(0.5);

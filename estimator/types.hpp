@@ -43,8 +43,14 @@ struct UwbRange {
   float rx_power_dbm = kNaNf;   // total received power [dBm], NaN when unknown
 };
 
+// Boards with little RAM may build with fewer tags (UWBNAV_MAX_TAGS, e.g.
+// hal/mps2); per anchor/tag pair state scales with kMaxAnchors * kMaxTags.
+#ifndef UWBNAV_MAX_TAGS
+#define UWBNAV_MAX_TAGS 4
+#endif
 constexpr size_t kMaxAnchors = 16;  // capacity of the anchor table
-constexpr size_t kMaxTags = 4;      // capacity of the tag table
+constexpr size_t kMaxTags = UWBNAV_MAX_TAGS;  // capacity of the tag table
+static_assert(kMaxTags >= 1 && kMaxTags <= 255, "tag ids and indices are uint8_t");
 
 struct Anchor {
   uint16_t id = 0;

@@ -18,10 +18,23 @@
 namespace uwbnav {
 
 constexpr uint32_t kCyclePeriodUs = 10000;  // 100 Hz loop
-constexpr size_t kMaxImuPerCycle = 32;      // frames drained per cycle; more wait for the next cycle
-constexpr size_t kMaxUwbPerCycle = 32;
+// Frames accepted per cycle; more wait in the HAL source for the next cycle.
+// Boards with little RAM set smaller capacities at build time (hal/mps2:
+// a 10 ms cycle sees ~3 IMU samples at 250 Hz and a few ranges).
+#ifndef UWBNAV_MAX_IMU_PER_CYCLE
+#define UWBNAV_MAX_IMU_PER_CYCLE 32
+#endif
+#ifndef UWBNAV_MAX_UWB_PER_CYCLE
+#define UWBNAV_MAX_UWB_PER_CYCLE 32
+#endif
+constexpr size_t kMaxImuPerCycle = UWBNAV_MAX_IMU_PER_CYCLE;
+constexpr size_t kMaxUwbPerCycle = UWBNAV_MAX_UWB_PER_CYCLE;
+static_assert(kMaxImuPerCycle >= 1 && kMaxUwbPerCycle >= 1, "a cycle must accept at least one frame of each");
 constexpr size_t kMaxCanRxPerCycle = 64;    // HIL input frames read per cycle
-constexpr size_t kMaxCanPending = 16;       // HIL samples held for the next cycle; beyond: validated now (future)
+#ifndef UWBNAV_MAX_CAN_PENDING
+#define UWBNAV_MAX_CAN_PENDING 16
+#endif
+constexpr size_t kMaxCanPending = UWBNAV_MAX_CAN_PENDING;  // HIL samples held for the next cycle; beyond: validated now (future)
 
 // Host-side tap on what the firmware computed (replay writers, tests, HIL).
 // The firmware calls it synchronously; implementations must not block.

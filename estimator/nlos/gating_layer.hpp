@@ -60,22 +60,23 @@ class GatingLayer {
  private:
   static constexpr size_t kSlots = kMaxAnchors * kMaxTags;
 
-  // Per anchor/tag pair.
+  // Per anchor/tag pair. Members ordered by alignment (no padding holes:
+  // kSlots of these are the largest part of the gating state).
   struct Slot {
-    bool has_prev = false;
     uint64_t prev_t_us = 0;
-    float prev_range_m = 0.0F;
     // Latest range of the pair, for epochs (D-S dynamic policy, RAIM).
-    bool has_last = false;
     uint64_t last_t_us = 0;
+    float prev_range_m = 0.0F;
     float last_range_m = 0.0F;
     Vec3f last_tag_pos_nav_m;
+    GatingAnchorStats stats;
+    // Hysteresis (default policy).
+    uint16_t los_streak = 0;
+    bool nlos_state = false;
+    bool has_prev = false;
+    bool has_last = false;
     bool last_filter_ready = false;
     bool last_nlos = false;
-    // Hysteresis (default policy).
-    bool nlos_state = false;
-    uint16_t los_streak = 0;
-    GatingAnchorStats stats;
   };
 
   // Evidence of one range, computed once and shared by the policies.

@@ -44,7 +44,10 @@ bool standardised_residuals(const LsRange* r, const size_t* idx, size_t m, const
   }
   Eigen::LDLT<Mat> ldlt(n_mat);
   if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-7F)) return false;
-  const Mat n_inv = ldlt.solve(Mat::Identity());
+  // Column by column: a matrix right-hand side takes Eigen's blocked
+  // triangular solver, which may allocate; vector solves never do.
+  Mat n_inv;
+  for (int c = 0; c < kUnknowns; ++c) n_inv.col(c) = ldlt.solve(Vec::Unit(c));
   for (size_t j = 0; j < m; ++j) {
     const LsRange& rr = r[idx[j]];
     const float qvv = rr.sigma_m * rr.sigma_m - h_rows[j].dot(n_inv * h_rows[j]);

@@ -197,8 +197,8 @@ const MessageDef* find_message(uint32_t id) {
 }
 
 int64_t to_raw(const SignalDef& s, double phys, bool* flagged) {
-  const auto raw_min = static_cast<int64_t>(std::llround((s.min - s.offset) / s.factor));
-  const auto raw_max = static_cast<int64_t>(std::llround((s.max - s.offset) / s.factor));
+  const int64_t raw_min = s.raw_min;
+  const int64_t raw_max = s.raw_max;
   if (!std::isfinite(phys)) {
     switch (s.non_finite) {
       case NonFinite::kRawZeroNa:

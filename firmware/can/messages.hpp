@@ -43,6 +43,14 @@ struct ValueName {
 
 // One signal, Intel (little-endian) byte order: start_bit is the LSB position,
 // bit index = byte * 8 + bit-in-byte. physical = raw * factor + offset.
+// Round half away from zero (std::llround) in a constant expression: v minus
+// its truncation is exact in double for |v| < 2^52.
+constexpr int64_t round_half_away(double v) {
+  const auto t = static_cast<int64_t>(v);
+  const double frac = v - static_cast<double>(t);
+  return frac >= 0.5 ? t + 1 : (frac <= -0.5 ? t - 1 : t);
+}
+
 struct SignalDef {
   const char* name;
   uint8_t start_bit;
@@ -57,6 +65,11 @@ struct SignalDef {
   NonFinite non_finite;
   const ValueName* values;  // value table (DBC VAL_), nullptr when none
   uint8_t num_values;
+  // Raw limits llround((min|max - offset) / factor), computed with the table
+  // at compile time: the encoder would otherwise divide in double (a library
+  // call on a single-precision FPU) twice per signal and frame.
+  int64_t raw_min = round_half_away((min - offset) / factor);
+  int64_t raw_max = round_half_away((max - offset) / factor);
 };
 
 struct MessageDef {

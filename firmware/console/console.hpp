@@ -44,7 +44,10 @@ class Console final : public LogSink {
  public:
   static constexpr size_t kRxBytesPerPoll = 64;    // input budget per cycle [bytes]
   static constexpr size_t kTxBytesPerPoll = 256;   // output budget per cycle [bytes]
-  static constexpr size_t kTxRingBytes = 2048;     // queued output [bytes]
+#ifndef UWBNAV_CONSOLE_TX_RING_BYTES
+#define UWBNAV_CONSOLE_TX_RING_BYTES 2048
+#endif
+  static constexpr size_t kTxRingBytes = UWBNAV_CONSOLE_TX_RING_BYTES;  // queued output [bytes]
   static constexpr size_t kOutLineMax = 320;       // longest reply line incl. CR LF [bytes]
   static constexpr size_t kReplyReserve = 512;     // TX room kept free of streams/logs for replies [bytes]
   static constexpr size_t kMaxArgs = 8;            // words per command line

@@ -55,7 +55,9 @@ class LockstepClock final : public hal::Clock {
 // board drains after each cycle (pop_sent); nothing is ever received.
 class RingCanBus final : public hal::CanBus {
  public:
-  static constexpr size_t kCapacity = 16;  // frames per cycle before kWouldBlock
+  // Frames per cycle before kWouldBlock: the publisher sends at most its six
+  // output messages in one cycle; a drop shows in the digest (can dropped=).
+  static constexpr size_t kCapacity = 8;
 
   // kOk: queued. kWouldBlock: ring full, dropped and counted. kInvalidArgument: bad length.
   [[nodiscard]] Status send(const hal::CanFrame& frame) override;

@@ -122,6 +122,21 @@ TEST(CanDbc, SignalsFitTheFrameAndNeverOverlap) {
   }
 }
 
+TEST(CanDbc, PrecomputedRawLimitsEqualLlroundOfThePhysicalLimits) {
+  for (size_t i = 0; i < kNumMessages; ++i) {
+    const MessageDef& m = kMessages[i];
+    for (uint8_t k = 0; k < m.num_signals; ++k) {
+      const SignalDef& s = m.signals[k];
+      EXPECT_EQ(s.raw_min, std::llround((s.min - s.offset) / s.factor)) << m.name << '.' << s.name;
+      EXPECT_EQ(s.raw_max, std::llround((s.max - s.offset) / s.factor)) << m.name << '.' << s.name;
+    }
+  }
+  for (const double v : {0.5, -0.5, 1.5, -1.5, 2.4999999999999996, 0.49999999999999994, -0.49999999999999994,
+                         32767.0, -32768.0, 65535.5, 1e15 + 0.5}) {
+    EXPECT_EQ(round_half_away(v), std::llround(v)) << v;
+  }
+}
+
 TEST(CanDbc, EveryMessageHasTheE2eHeaderAndUniqueIdsAndDataIds) {
   for (size_t i = 0; i < kNumMessages; ++i) {
     const MessageDef& m = kMessages[i];
