@@ -121,12 +121,15 @@ inline Quat quat_level(const Vec3& accel_body_mps2) {
   return quat_mul(qp, qr);  // C = Ry(pitch) Rx(roll), yaw 0
 }
 
+// pi in the estimator's precision (M_PI is POSIX, not C++17: absent on picolibc).
+constexpr Real kPi = static_cast<Real>(3.14159265358979323846);
+
 inline Real wrap_pi(Real a) {
-  const Real two_pi = Real(2) * static_cast<Real>(M_PI);
+  const Real two_pi = Real(2) * kPi;
   if (!std::isfinite(a)) return Real(0);
-  a = std::fmod(a + static_cast<Real>(M_PI), two_pi);
+  a = std::fmod(a + kPi, two_pi);
   if (a < Real(0)) a += two_pi;
-  return a - static_cast<Real>(M_PI);
+  return a - kPi;
 }
 
 }  // namespace uwbnav

@@ -8,7 +8,7 @@
 namespace uwbnav {
 namespace {
 
-constexpr Real kTwoPi = Real(2) * static_cast<Real>(M_PI);
+constexpr Real kTwoPi = Real(2) * kPi;
 // Normalised innovation squared beyond which a range is treated as an outlier
 // for the model: its likelihood is clipped (one NLOS range cannot decide
 // between hypotheses) and its R inflated so the update stays bounded.
@@ -42,7 +42,7 @@ void YawGsf::reset() {
 void YawGsf::start(const Vec3& tag_pos_nav_m, const Vec3& lever_lvl_m, Real yaw0_rad, Real pos_sigma_h_m,
                    Real pos_sigma_v_m, Real vel_sigma_mps) {
   reset();
-  const Real yaw_sigma = static_cast<Real>(M_PI) / static_cast<Real>(kModels);
+  const Real yaw_sigma = kPi / static_cast<Real>(kModels);
   for (int k = 0; k < kModels; ++k) {
     const Real psi = wrap_pi(yaw0_rad + kTwoPi * static_cast<Real>(k) / static_cast<Real>(kModels));
     x_[k].setZero();

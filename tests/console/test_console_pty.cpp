@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <string>
 #include <thread>
@@ -181,8 +182,18 @@ TEST(ConsolePty, PersonAtATerminalQueriesTheFirmwareAndChangesLiveBehaviourWithP
   auto stats_uwb = [&] { return find_line(term.run("stats"), "stats src=uwb "); };
   EXPECT_EQ(find_line(term.run("param set uwb.max_range 1"), "param "), "param name=uwb.max_range value=1 old=500");
   const std::string s1 = stats_uwb();
-  std::this_thread::sleep_for(300ms);
-  const std::string s2 = stats_uwb();
+  // Poll (as a person would look again) until the firmware thread has run on;
+  // a loaded machine slows it down, so no fixed sleep decides the outcome.
+  auto poll_until = [&](const std::function<bool(const std::string&)>& done) {
+    std::string line = stats_uwb();
+    for (auto deadline = std::chrono::steady_clock::now() + 20s; !done(line) && std::chrono::steady_clock::now() < deadline;) {
+      std::this_thread::sleep_for(100ms);
+      line = stats_uwb();
+    }
+    return line;
+  };
+  const std::string s2 =
+      poll_until([&](const std::string& l) { return kv_num(l, "out_of_range") > kv_num(s1, "out_of_range") + 20.0; });
   // THEN ranges are rejected as out of range and none is accepted any more
   ASSERT_FALSE(s1.empty());
   ASSERT_FALSE(s2.empty());
@@ -197,8 +208,7 @@ TEST(ConsolePty, PersonAtATerminalQueriesTheFirmwareAndChangesLiveBehaviourWithP
   // WHEN the parameter is reset THEN ranges flow again
   EXPECT_EQ(find_line(term.run("param reset uwb.max_range"), "param "), "param name=uwb.max_range value=500 old=1");
   const std::string s3 = stats_uwb();
-  std::this_thread::sleep_for(300ms);
-  const std::string s4 = stats_uwb();
+  const std::string s4 = poll_until([&](const std::string& l) { return kv_num(l, "accepted") > kv_num(s3, "accepted") + 20.0; });
   EXPECT_GT(kv_num(s4, "accepted"), kv_num(s3, "accepted") + 20.0) << s3 << "\n" << s4;
 
   // Saving goes to the board's parameter store (a file on the host)
