@@ -160,8 +160,9 @@ int cmd_firmware(int argc, char** argv) {
       "  (can.hil_rx_enable = 1) and --site DIR (a recording) gives the anchors and tags\n";
   double duration_s = 0.0;
   if (args.has("--duration")) {
+    const std::string text = args.get("--duration");  // keep alive: `end` points into it
     char* end = nullptr;
-    duration_s = std::strtod(args.get("--duration").c_str(), &end);
+    duration_s = std::strtod(text.c_str(), &end);
     if (*end != '\0' || !(duration_s > 0.0)) duration_s = -1.0;
   }
   if (!args.error().empty() || !args.positional().empty() || !args.unknown(known).empty() || duration_s < 0.0 ||
