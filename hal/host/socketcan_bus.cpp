@@ -369,8 +369,8 @@ Status SocketCanBus::receive(CanFrame& out) {
   return Status::kEmpty;
 }
 
-Status can_link_listen(const std::string& path, int& listen_fd, std::string* error) {
-  struct sockaddr_un addr;
+// Fills a Unix socket address for `path` and opens a SOCK_SEQPACKET socket.
+static Status seqpacket_socket(const std::string& path, struct sockaddr_un& addr, int& fd, std::string* error) {
   std::memset(&addr, 0, sizeof(addr));
   addr.sun_family = AF_UNIX;
   if (path.size() >= sizeof(addr.sun_path)) {
@@ -378,11 +378,19 @@ Status can_link_listen(const std::string& path, int& listen_fd, std::string* err
     return Status::kInvalidArgument;
   }
   std::memcpy(addr.sun_path, path.c_str(), path.size());
-  const int fd = ::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0);
+  fd = ::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0);
   if (fd < 0) {
     if (error != nullptr) *error = errno_text("socket(AF_UNIX, SOCK_SEQPACKET)", errno);
     return Status::kIoError;
   }
+  return Status::kOk;
+}
+
+Status can_link_listen(const std::string& path, int& listen_fd, std::string* error) {
+  struct sockaddr_un addr;
+  int fd = -1;
+  const Status s = seqpacket_socket(path, addr, fd, error);
+  if (!ok(s)) return s;
   ::unlink(path.c_str());
   if (::bind(fd, reinterpret_cast<struct sockaddr*>(&addr), sizeof(addr)) != 0 || ::listen(fd, 1) != 0) {
     if (error != nullptr) *error = errno_text(("bind/listen " + path).c_str(), errno);
@@ -415,18 +423,9 @@ Status can_link_accept(int listen_fd, int timeout_ms, int& fd, std::string* erro
 
 Status can_link_connect(const std::string& path, int& fd, std::string* error) {
   struct sockaddr_un addr;
-  std::memset(&addr, 0, sizeof(addr));
-  addr.sun_family = AF_UNIX;
-  if (path.size() >= sizeof(addr.sun_path)) {
-    if (error != nullptr) *error = "socket path too long: " + path;
-    return Status::kInvalidArgument;
-  }
-  std::memcpy(addr.sun_path, path.c_str(), path.size());
-  const int c = ::socket(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0);
-  if (c < 0) {
-    if (error != nullptr) *error = errno_text("socket(AF_UNIX, SOCK_SEQPACKET)", errno);
-    return Status::kIoError;
-  }
+  int c = -1;
+  const Status s = seqpacket_socket(path, addr, c, error);
+  if (!ok(s)) return s;
   if (::connect(c, reinterpret_cast<struct sockaddr*>(&addr), sizeof(addr)) != 0) {
     const int err = errno;
     if (error != nullptr) *error = errno_text(("connect " + path).c_str(), err);
