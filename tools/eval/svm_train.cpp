@@ -386,6 +386,23 @@ void cross_validate(const std::vector<SvmSample>& samples, SvmFeatureSet set, do
   }
 }
 
+// Keeps one grid point of the C/gamma search in the report and tracks the best
+// (strictly better accuracy wins, so ties keep the earlier, smaller C/gamma).
+static void record_grid_point(const SvmGridPoint& gp, const char* score_name, bool verbose, SvmTrainReport& report,
+                              size_t& best_n) {
+  report.grid.push_back(gp);
+  if (verbose) {
+    std::fprintf(stderr, "  C=%-8g gamma=%-8g n=%-5zu %s=%.4f\n", gp.c, gp.gamma, gp.train_size, score_name,
+                 gp.cv_accuracy);
+  }
+  if (gp.cv_accuracy > report.best_cv_accuracy + 1e-12) {
+    report.best_cv_accuracy = gp.cv_accuracy;
+    report.best_c = gp.c;
+    report.best_gamma = gp.gamma;
+    best_n = gp.train_size;
+  }
+}
+
 namespace {
 
 // The edited recipe (options.edit_pool > 0): Wilson-edited training pool, (C, gamma)
@@ -420,16 +437,7 @@ Status train_edited(const std::vector<SvmSample>& samples, const SvmTrainOptions
       svm_model* lm = svm_train(&prob->prob, &param);
       SvmGridPoint gp{c, g, validate(lm, scaling, val, nullptr), n_fit};
       svm_free_and_destroy_model(&lm);
-      report.grid.push_back(gp);
-      if (options.verbose) {
-        std::fprintf(stderr, "  C=%-8g gamma=%-8g n=%-5zu validation=%.4f\n", c, g, n_fit, gp.cv_accuracy);
-      }
-      if (gp.cv_accuracy > report.best_cv_accuracy + 1e-12) {
-        report.best_cv_accuracy = gp.cv_accuracy;
-        report.best_c = c;
-        report.best_gamma = g;
-        best_n = n_fit;
-      }
+      record_grid_point(gp, "validation", options.verbose, report, best_n);
     }
   }
   if (best_n == 0) {
@@ -514,16 +522,7 @@ Status train_svm_model(const std::vector<SvmSample>& samples, const SvmTrainOpti
         for (size_t k = 0; k < grid_set.size(); ++k) correct += (target[k] > 0.5 ? 1 : 0) == grid_set[k].label ? 1U : 0U;
       }
       SvmGridPoint gp{c, g, static_cast<double>(correct) / static_cast<double>(grid_set.size()), n_fit};
-      report.grid.push_back(gp);
-      if (options.verbose) {
-        std::fprintf(stderr, "  C=%-8g gamma=%-8g n=%-5zu cv=%.4f\n", c, g, n_fit, gp.cv_accuracy);
-      }
-      if (gp.cv_accuracy > report.best_cv_accuracy + 1e-12) {
-        report.best_cv_accuracy = gp.cv_accuracy;
-        report.best_c = c;
-        report.best_gamma = g;
-        best_n = n_fit;
-      }
+      record_grid_point(gp, "cv", options.verbose, report, best_n);
     }
   }
   if (best_n == 0) {
