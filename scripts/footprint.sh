@@ -54,6 +54,6 @@ fi
   --profile "$work/profile.txt" > "$work/profile.json"
 "$py" hal/mps2/footprint_report.py "${check[@]}" --analysis "$work/analysis.json" --digest "$work/digest.txt" \
   --profile "$work/profile.json" \
-  --out "$out" --git "$(git rev-parse --short=12 HEAD 2>/dev/null || echo unknown)" \
+  --cache "$build/CMakeCache.txt" --out "$out" --git "$(git rev-parse --short=12 HEAD 2>/dev/null || echo unknown)" \
   --qemu-command "qemu-system-arm -M mps2-an386 -nographic -monitor none -serial none -semihosting-config enable=on,target=native -icount shift=0 -kernel uwbnav_mps2.elf"
 echo "footprint: wrote $out"

@@ -14,7 +14,8 @@
 namespace uwbnav {
 
 constexpr size_t kSvmMaxSupportVectors = 256;  // evaluator capacity; training respects it
-constexpr size_t kSvmMaxFeatures = 4;
+// Features per model: the largest feature set below (checked after svm_feature_count).
+constexpr size_t kSvmMaxFeatures = 2;
 constexpr uint32_t kSvmModelVersion = 2;       // layout/semantics of SvmModel (2: float content)
 
 // What the feature vector of a model means (stable values, stored in the model).
@@ -27,6 +28,10 @@ enum class SvmFeatureSet : uint8_t {
 constexpr size_t svm_feature_count(SvmFeatureSet set) {
   return set == SvmFeatureSet::kRangeRate ? 1U : 2U;
 }
+static_assert(svm_feature_count(SvmFeatureSet::kRangeRate) <= kSvmMaxFeatures &&
+                  svm_feature_count(SvmFeatureSet::kRangeRateSpeed) <= kSvmMaxFeatures &&
+                  svm_feature_count(SvmFeatureSet::kChannel) <= kSvmMaxFeatures,
+              "kSvmMaxFeatures below a feature set's size");
 
 // One trained two-class C-SVC with RBF kernel K = exp(-gamma |x - x'|^2) (seed 000 eq. 2),
 // libsvm's double model rounded to float. Support vectors are stored already scaled to
