@@ -13,7 +13,13 @@
 namespace uwbnav {
 namespace {
 
-uint64_t us_param(float v) { return v > 0.0F ? static_cast<uint64_t>(v) : 0U; }
+// Microseconds (float parameter) to integer microseconds, truncated, through
+// uint32_t: float -> uint64_t is a soft-double libgcc call on the Cortex-M4F.
+// The parameter table bounds these values far below 2^32 us; the clamp keeps
+// the conversion defined anyway.
+uint64_t us_param(float v) {
+  return v > 0.0F ? static_cast<uint64_t>(static_cast<uint32_t>(std::fmin(v, 4.0e9F))) : 0U;
+}
 
 Real seconds(int64_t dt_us) { return static_cast<Real>(dt_us) * Real(1e-6); }
 
@@ -96,7 +102,7 @@ void Navigator::update_params(const Params& params) {
   c.height_mode = static_cast<int>(std::lround(params[ParamId::kEkfHeightMode]));
   c.height_sigma = static_cast<Real>(params[ParamId::kEkfHeightSigma]);
   c.origin_height = static_cast<Real>(params[ParamId::kEkfOriginHeight]);
-  c.constraint_period_us = static_cast<uint64_t>(1e6F / params[ParamId::kEkfConstraintRate]);
+  c.constraint_period_us = us_param(1e6F / params[ParamId::kEkfConstraintRate]);
   c.cv_accel_psd = static_cast<Real>(params[ParamId::kEkfCvAccelPsd]);
   c.init_window_us = us_param(params[ParamId::kEkfInitWindow] * 1e6F);
   c.init_heading_dist = static_cast<Real>(params[ParamId::kEkfInitHeadingDist]);

@@ -34,7 +34,8 @@ void InputValidator::update_params(const Params& params) {
   max_gyro_radps_ = params[ParamId::kInImuMaxGyro];
   min_range_m_ = params[ParamId::kUwbMinRange];
   max_range_m_ = params[ParamId::kUwbMaxRange];
-  stale_us_ = static_cast<uint64_t>(params[ParamId::kInStaleUs]);
+  // Through uint32_t (the table bounds it to 5e6 us): float -> uint64_t is a soft-double call on the M4F.
+  stale_us_ = static_cast<uint32_t>(params[ParamId::kInStaleUs]);
   drop_repeated_ = params[ParamId::kInDropRepeated] > 0.5F;
 }
 

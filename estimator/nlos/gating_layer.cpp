@@ -19,7 +19,15 @@ GatingPolicy policy_from_param(float value) {
   return static_cast<GatingPolicy>(v);
 }
 
-uint64_t us_from_param(float value) { return value > 0.0F ? static_cast<uint64_t>(value) : 0U; }
+// A parameter in microseconds to integer microseconds, truncated. Through
+// uint32_t: float -> uint64_t is a libgcc call on the Cortex-M4F that computes
+// in soft double; the parameter table bounds every such value (seconds
+// parameters times 1e6 included) far below 2^32 us (71 min), and the clamp
+// keeps the conversion defined anyway.
+constexpr float kMaxUsParam = 4.0e9F;
+uint64_t us_from_param(float value) {
+  return value > 0.0F ? static_cast<uint64_t>(static_cast<uint32_t>(std::fmin(value, kMaxUsParam))) : 0U;
+}
 
 float distance_m(const Vec3f& a, const Vec3f& b) {
   const float dx = a.x - b.x;
@@ -70,7 +78,7 @@ void GatingLayer::update_params(const Params& params) {
   const float pfa = params[ParamId::kGateRaimPfa];
   const float pfa_local = params[ParamId::kGateRaimPfaLocal];
   if (pfa != raim_pfa_ || pfa_local != raim_pfa_local_) {  // quantiles only when changed
-    raim_compute_thresholds(static_cast<double>(pfa), static_cast<double>(pfa_local), raim_thresholds_);
+    raim_compute_thresholds(pfa, pfa_local, raim_thresholds_);
     raim_pfa_ = pfa;
     raim_pfa_local_ = pfa_local;
   }
@@ -78,13 +86,13 @@ void GatingLayer::update_params(const Params& params) {
   chan_hi_db_ = params[ParamId::kGateChanHiDb];
   chan_p_max_ = params[ParamId::kGateChanPMax];
   hyst_n_ = static_cast<uint16_t>(std::lround(params[ParamId::kGateHystN]));
-  escape_us_ = static_cast<uint64_t>(static_cast<double>(params[ParamId::kGateEscapeS]) * 1e6);
+  escape_us_ = us_from_param(params[ParamId::kGateEscapeS] * 1e6F);
   escape_r_scale_ = params[ParamId::kGateEscapeRScale];
   default_nlos_ = params[ParamId::kGateDefaultNlos];
   innov_z0_ = params[ParamId::kGateInnovZ0];
   verify_frac_ = params[ParamId::kGateVerifyFrac];
   drift_frac_ = params[ParamId::kGateDriftFrac];
-  warmup_us_ = static_cast<uint64_t>(static_cast<double>(params[ParamId::kGateWarmupS]) * 1e6);
+  warmup_us_ = us_from_param(params[ParamId::kGateWarmupS] * 1e6F);
 }
 
 void GatingLayer::reset() {

@@ -9,12 +9,12 @@
 
 namespace uwbnav {
 
-void raim_compute_thresholds(double p_fa, double p_fa_local, RaimThresholds& out) {
+void raim_compute_thresholds(float p_fa, float p_fa_local, RaimThresholds& out) {
   out.chi2_by_dof[0] = 0.0F;
   for (size_t dof = 1; dof <= kRaimMaxRanges; ++dof) {
-    out.chi2_by_dof[dof] = static_cast<float>(chi_square_quantile(1.0 - p_fa, static_cast<int>(dof)));
+    out.chi2_by_dof[dof] = chi_square_upper_quantile(p_fa, static_cast<int>(dof));
   }
-  out.local = static_cast<float>(normal_quantile(1.0 - 0.5 * p_fa_local));
+  out.local = normal_upper_quantile(0.5F * p_fa_local);
 }
 
 namespace {

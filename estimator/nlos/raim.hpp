@@ -25,7 +25,9 @@ struct RaimThresholds {
 
 // Global test at false-alarm probability p_fa (chi-square, upper tail) and
 // local test at p_fa_local (two-sided normal, Bonferroni over n is not applied).
-void raim_compute_thresholds(double p_fa, double p_fa_local, RaimThresholds& out);
+// Float, in terms of the tail probabilities themselves (no 1 - p_fa), so the
+// smallest allowed p_fa (1e-9) keeps its meaning.
+void raim_compute_thresholds(float p_fa, float p_fa_local, RaimThresholds& out);
 
 struct RaimResult {
   bool excluded[kRaimMaxRanges] = {};  // range i excluded as faulty

@@ -62,7 +62,7 @@ void BM_NlosRaimEpoch(benchmark::State& state) {
   opt.has_initial_guess = true;
   opt.initial_guess_nav_m = Vec3f{19.0F, 16.0F, tag.z};
   RaimThresholds th;
-  raim_compute_thresholds(1e-3, 1e-3, th);
+  raim_compute_thresholds(1e-3F, 1e-3F, th);
   for (auto _ : state) {
     RaimResult res;
     benchmark::DoNotOptimize(raim_run(r, static_cast<size_t>(n), opt, th, res));

@@ -1,6 +1,7 @@
 // Protects seed 001 RAIM: no exclusion on consistent ranges, the faulty range
 // located and excluded, no location attempt without redundancy (dof 1), and
-// repeated exclusion of two faults when redundancy remains.
+// repeated exclusion of two faults when redundancy remains; thresholds down
+// to the smallest allowed false-alarm probability.
 #include <cmath>
 #include <random>
 
@@ -35,7 +36,7 @@ LsOptions planar_options() {
 
 RaimThresholds thresholds() {
   RaimThresholds t;
-  raim_compute_thresholds(1e-3, 1e-3, t);
+  raim_compute_thresholds(1e-3F, 1e-3F, t);
   return t;
 }
 
@@ -44,6 +45,18 @@ TEST(Raim, ThresholdsFromFalseAlarmProbability) {
   EXPECT_NEAR(t.chi2_by_dof[1], 10.8276F, 1e-3F);
   EXPECT_NEAR(t.chi2_by_dof[2], 13.8155F, 1e-3F);
   EXPECT_NEAR(t.local, 3.2905F, 1e-3F);
+}
+
+TEST(Raim, ThresholdsAtSmallestFalseAlarmProbabilityKeepTheTail) {
+  // gate.raim_pfa = 1e-9 (its minimum): 1 - 1e-9 rounds to 1 in float, so the
+  // thresholds must come from the tail probability itself (scipy chi2.isf /
+  // norm.isf: 37.32489, 41.44653, 75.65418; local 6.109410 at 5e-10).
+  RaimThresholds t;
+  raim_compute_thresholds(1e-9F, 1e-9F, t);
+  EXPECT_NEAR(t.chi2_by_dof[1], 37.32489F, 1e-4F);
+  EXPECT_NEAR(t.chi2_by_dof[2], 41.44653F, 1e-4F);
+  EXPECT_NEAR(t.chi2_by_dof[16], 75.65418F, 2e-4F);
+  EXPECT_NEAR(t.local, 6.109410F, 1e-5F);
 }
 
 TEST(Raim, ConsistentEpochKeepsAllRanges) {
