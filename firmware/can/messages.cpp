@@ -1,232 +1,274 @@
-// The uwbnav CAN message table (source of docs/uwbnav.dbc) and its Intel-order
-// packer/unpacker with saturation, plus the typed encode/decode functions.
+// The CAN codec: the run-time signal layout derived at compile time from the
+// message table (firmware/can/message_table.hpp), exact float <-> raw
+// conversion in integer arithmetic, Intel-order packing with saturation, and the
+// typed encode/decode functions. No double and no table string reaches the image.
 #include "firmware/can/messages.hpp"
 
 #include <cmath>
+#include <cstring>
+#include <limits>
 
 #include "firmware/can/e2e.hpp"
 
 namespace uwbnav::can {
 namespace {
 
+static_assert(std::numeric_limits<float>::is_iec559, "raw_from_phys decodes IEEE-754 binary32");
+
+// ---- Compile-time derivation of the run-time layout ----------------------
+
 constexpr double kPi = 3.14159265358979323846;
+constexpr int64_t kScaledRawLimit = int64_t{1} << 24;  // raw (and raw - raw_zero) exact in float
 
-constexpr ValueName kStatusValues[] = {
-    {0, "initialising"}, {1, "valid"}, {2, "degraded"}, {3, "invalid"}};
+constexpr double abs_d(double v) { return v < 0.0 ? -v : v; }
 
-constexpr ValueName kPowerValues[] = {{0, "not_available"}};
-
-// Common E2E header of every frame: CRC (byte 0), alive counter (byte 1 bits
-// 0..3), Saturated flag (byte 1 bit 7). Bits 12..14 are message specific.
-#define UWBNAV_CAN_HEADER(P)                                                                            \
-  {P "_CRC", 0, 8, false, 1.0, 0.0, 0.0, 255.0, "", "CRC-8 SAE J1850 over E2EDataID (low byte, high byte) and bytes 1..7", \
-   NonFinite::kZeroFlagged, nullptr, 0},                                                                \
-  {P "_AliveCounter", 8, 4, false, 1.0, 0.0, 0.0, 14.0, "", "alive counter 0..14, +1 per transmission, 15 never sent", \
-   NonFinite::kZeroFlagged, nullptr, 0},                                                                \
-  {P "_Saturated", 15, 1, false, 1.0, 0.0, 0.0, 1.0, "",                                                \
-   "1 = a signal of this frame was clipped to its range or was not finite at the sender",               \
-   NonFinite::kZeroFlagged, nullptr, 0}
-
-constexpr SignalDef kNavTimeSignals[] = {
-    UWBNAV_CAN_HEADER("NavTime"),
-    {"NavTime_Us", 16, 48, false, 1.0, 0.0, 0.0, 281474976710655.0, "us",
-     "estimator time of the solution carried by the frames of this 10 ms group (same alive counter)",
-     NonFinite::kZeroFlagged, nullptr, 0},
-};
-
-constexpr SignalDef kPosXYSignals[] = {
-    UWBNAV_CAN_HEADER("PosXY"),
-    {"PosXY_Status", 12, 2, false, 1.0, 0.0, 0.0, 3.0, "", "navigation solution status",
-     NonFinite::kZeroFlagged, kStatusValues, 4},
-    {"PosX", 16, 24, true, 0.001, 0.0, -8388.608, 8388.607, "m", "body origin x in the anchor (navigation) frame",
-     NonFinite::kZeroFlagged, nullptr, 0},
-    {"PosY", 40, 24, true, 0.001, 0.0, -8388.608, 8388.607, "m", "body origin y in the anchor (navigation) frame",
-     NonFinite::kZeroFlagged, nullptr, 0},
-};
-
-constexpr SignalDef kPosZSignals[] = {
-    UWBNAV_CAN_HEADER("PosZ"),
-    {"PosZ_Status", 12, 2, false, 1.0, 0.0, 0.0, 3.0, "", "navigation solution status",
-     NonFinite::kZeroFlagged, kStatusValues, 4},
-    {"PosZ", 16, 16, true, 0.001, 0.0, -32.768, 32.767, "m", "body origin z (up) in the anchor frame",
-     NonFinite::kZeroFlagged, nullptr, 0},
-    {"VelZ", 32, 16, true, 0.01, 0.0, -327.68, 327.67, "m/s", "body origin velocity z (up), navigation frame",
-     NonFinite::kZeroFlagged, nullptr, 0},
-    {"RangesUsed", 48, 8, false, 1.0, 0.0, 0.0, 255.0, "", "UWB ranges fused since the previous output",
-     NonFinite::kZeroFlagged, nullptr, 0},
-    {"RangesRejected", 56, 8, false, 1.0, 0.0, 0.0, 255.0, "", "UWB ranges rejected since the previous output",
-     NonFinite::kZeroFlagged, nullptr, 0},
-};
-
-constexpr SignalDef kVelHdgSignals[] = {
-    UWBNAV_CAN_HEADER("VelHdg"),
-    {"VelX", 16, 16, true, 0.01, 0.0, -327.68, 327.67, "m/s", "body origin velocity x, navigation frame",
-     NonFinite::kZeroFlagged, nullptr, 0},
-    {"VelY", 32, 16, true, 0.01, 0.0, -327.68, 327.67, "m/s", "body origin velocity y, navigation frame",
-     NonFinite::kZeroFlagged, nullptr, 0},
-    {"Heading", 48, 16, true, 0.0001, 0.0, -3.1416, 3.1416, "rad",
-     "yaw of the body x axis from the navigation x axis, counter-clockwise positive",
-     NonFinite::kZeroFlagged, nullptr, 0},
-};
-
-constexpr SignalDef kAccuracySignals[] = {
-    UWBNAV_CAN_HEADER("Accuracy"),
-    {"SigmaX", 16, 12, false, 0.005, 0.0, 0.0, 20.475, "m", "claimed 1-sigma of PosX (unknown: maximum)",
-     NonFinite::kMaxFlagged, nullptr, 0},
-    {"SigmaY", 28, 12, false, 0.005, 0.0, 0.0, 20.475, "m", "claimed 1-sigma of PosY (unknown: maximum)",
-     NonFinite::kMaxFlagged, nullptr, 0},
-    {"SigmaZ", 40, 12, false, 0.005, 0.0, 0.0, 20.475, "m", "claimed 1-sigma of PosZ (unknown: maximum)",
-     NonFinite::kMaxFlagged, nullptr, 0},
-    {"CorrXY", 52, 12, true, 0.001, 0.0, -1.0, 1.0, "", "correlation coefficient of the x and y position errors",
-     NonFinite::kZeroFlagged, nullptr, 0},
-};
-
-constexpr SignalDef kDiagSignals[] = {
-    UWBNAV_CAN_HEADER("Diag"),
-    {"Diag_Resets", 12, 3, false, 1.0, 0.0, 0.0, 7.0, "", "filter resets since start (saturates at 7)",
-     NonFinite::kZeroFlagged, nullptr, 0},
-    {"NlosMask", 16, 16, false, 1.0, 0.0, 0.0, 65535.0, "",
-     "bit i = 1: the last range from anchor table index i was judged NLOS",
-     NonFinite::kZeroFlagged, nullptr, 0},
-    {"LoopOverruns", 32, 16, false, 1.0, 0.0, 0.0, 65535.0, "", "10 ms cycles that overran since start (saturates)",
-     NonFinite::kZeroFlagged, nullptr, 0},
-    {"InputRejects", 48, 16, false, 1.0, 0.0, 0.0, 65535.0, "",
-     "sensor frames rejected by input validation since start (saturates)", NonFinite::kZeroFlagged, nullptr, 0},
-};
-
-constexpr SignalDef kHilImuTimeSignals[] = {
-    UWBNAV_CAN_HEADER("ImuTime"),
-    {"ImuTime_Us", 16, 32, false, 1.0, 0.0, 0.0, 4294967295.0, "us",
-     "sensor timestamp of the IMU sample, low 32 bits of the receiver time base (wraps every 71.6 min)",
-     NonFinite::kZeroFlagged, nullptr, 0},
-};
-
-constexpr SignalDef kHilImuAccelSignals[] = {
-    UWBNAV_CAN_HEADER("ImuAccel"),
-    {"AccelX", 16, 16, true, 0.005, 0.0, -163.84, 163.835, "m/s^2", "specific force x, body frame FLU",
-     NonFinite::kZeroFlagged, nullptr, 0},
-    {"AccelY", 32, 16, true, 0.005, 0.0, -163.84, 163.835, "m/s^2", "specific force y, body frame FLU",
-     NonFinite::kZeroFlagged, nullptr, 0},
-    {"AccelZ", 48, 16, true, 0.005, 0.0, -163.84, 163.835, "m/s^2", "specific force z, body frame FLU (+9.81 level at rest)",
-     NonFinite::kZeroFlagged, nullptr, 0},
-};
-
-constexpr SignalDef kHilImuGyroSignals[] = {
-    UWBNAV_CAN_HEADER("ImuGyro"),
-    {"GyroX", 16, 16, true, 0.001, 0.0, -32.768, 32.767, "rad/s", "angular rate x, body frame FLU",
-     NonFinite::kZeroFlagged, nullptr, 0},
-    {"GyroY", 32, 16, true, 0.001, 0.0, -32.768, 32.767, "rad/s", "angular rate y, body frame FLU",
-     NonFinite::kZeroFlagged, nullptr, 0},
-    {"GyroZ", 48, 16, true, 0.001, 0.0, -32.768, 32.767, "rad/s", "angular rate z, body frame FLU",
-     NonFinite::kZeroFlagged, nullptr, 0},
-};
-
-constexpr SignalDef kHilUwbRangeSignals[] = {
-    UWBNAV_CAN_HEADER("UwbRange"),
-    {"AnchorId", 16, 16, false, 1.0, 0.0, 0.0, 65535.0, "", "anchor id as surveyed (anchors.csv)",
-     NonFinite::kZeroFlagged, nullptr, 0},
-    {"TagId", 32, 8, false, 1.0, 0.0, 0.0, 255.0, "", "tag id on the vehicle (tags.csv)",
-     NonFinite::kZeroFlagged, nullptr, 0},
-    {"Range", 40, 24, true, 0.001, 0.0, -8388.608, 8388.607, "m", "two-way range, antenna to antenna (radios may report small negative values)",
-     NonFinite::kZeroFlagged, nullptr, 0},
-};
-
-constexpr SignalDef kHilUwbTimeSignals[] = {
-    UWBNAV_CAN_HEADER("UwbTime"),
-    {"UwbTime_Us", 16, 32, false, 1.0, 0.0, 0.0, 4294967295.0, "us",
-     "sensor timestamp of the range, low 32 bits of the receiver time base (wraps every 71.6 min)",
-     NonFinite::kZeroFlagged, nullptr, 0},
-    {"FpPower", 48, 8, false, 0.5, -128.0, -127.5, -0.5, "dBm", "first-path power, raw 0 = not available",
-     NonFinite::kRawZeroNa, kPowerValues, 1},
-    {"RxPower", 56, 8, false, 0.5, -128.0, -127.5, -0.5, "dBm", "total received power, raw 0 = not available",
-     NonFinite::kRawZeroNa, kPowerValues, 1},
-};
-
-#undef UWBNAV_CAN_HEADER
-
-template <size_t N>
-constexpr uint8_t count_of(const SignalDef (&)[N]) {
-  static_assert(N <= kMaxSignals, "raise kMaxSignals");
-  return static_cast<uint8_t>(N);
+constexpr int64_t inv_factor_of(const SignalDef& s) { return round_half_away(1.0 / s.factor); }
+constexpr int64_t raw_zero_of(const SignalDef& s) {
+  return round_half_away(-s.offset * static_cast<double>(inv_factor_of(s)));
+}
+constexpr int64_t raw_of(const SignalDef& s, double phys) { return round_half_away((phys - s.offset) / s.factor); }
+constexpr int64_t field_min(const SignalDef& s) { return s.is_signed ? -(int64_t{1} << (s.bit_len - 1)) : 0; }
+constexpr int64_t field_max(const SignalDef& s) {
+  return s.is_signed ? (int64_t{1} << (s.bit_len - 1)) - 1 : (int64_t{1} << s.bit_len) - 1;
 }
 
-// Data IDs: 0x1000 | CAN id (unique per message, fixed for the life of the layout).
-constexpr uint16_t data_id_for(MsgId id) { return static_cast<uint16_t>(0x1000U | id_of(id)); }
+// 'c': an unsigned integer count, encoded as it is and clipped to the field maximum.
+constexpr bool is_count(const SignalDef& s) {
+  return s.factor == 1.0 && s.offset == 0.0 && s.min == 0.0 && !s.is_signed && s.bit_len <= 53 &&
+         s.max == static_cast<double>(field_max(s));
+}
+
+// 'p': a scaled physical value. 1/factor and offset/factor are integers (so the
+// integer formula of SignalLayout is exact), and every raw value of the field
+// minus raw_zero is exact in float (so decoding is one correctly rounded division).
+constexpr bool is_scaled(const SignalDef& s) {
+  const int64_t inv = inv_factor_of(s);
+  const int64_t zero = raw_zero_of(s);
+  const double zero_exact = -s.offset * static_cast<double>(inv);
+  return inv >= 1 && inv <= 65535 && abs_d(1.0 / s.factor - static_cast<double>(inv)) <= 1e-9 * static_cast<double>(inv) &&
+         abs_d(zero_exact - static_cast<double>(zero)) <= 1e-9 && zero >= -32768 && zero <= 32767 &&
+         raw_of(s, s.min) <= raw_of(s, s.max) && raw_of(s, s.min) >= field_min(s) && raw_of(s, s.max) <= field_max(s) &&
+         field_min(s) - zero >= -kScaledRawLimit && field_max(s) - zero <= kScaledRawLimit;
+}
+
+// 'a': a scaled angle [rad] with offset 0 whose raw limits hold every wrapped angle.
+constexpr bool is_angle(const SignalDef& s) {
+  const int64_t pi_raw = round_half_away(kPi * static_cast<double>(inv_factor_of(s)));
+  return is_scaled(s) && s.offset == 0.0 && raw_of(s, s.max) >= pi_raw && raw_of(s, s.min) <= -pi_raw;
+}
+
+constexpr bool header_ok(const MessageDef& m) {
+  const SignalDef* s = m.signals;
+  return m.num_signals > kFirstPayloadSignal && m.num_signals <= kMaxSignals && m.dlc == 8 && m.id <= 0x7FFU &&
+         s[kSigCrc].start_bit == 0 && s[kSigCrc].bit_len == 8 && s[kSigCounter].start_bit == 8 &&
+         s[kSigCounter].bit_len == 4 && s[kSigSaturated].start_bit == 15 && s[kSigSaturated].bit_len == 1;
+}
+
+constexpr size_t index_of(MsgId id) {
+  size_t i = 0;
+  while (i < kNumMessages && kMessages[i].id != id_of(id)) ++i;
+  return i;
+}
+
+// True when the payload signals of `id` are, in order, of the kinds in `kinds`
+// ('c' count, 'p' scaled, 'a' angle): ties each typed encode/decode below to the table.
+constexpr bool kinds_are(MsgId id, const char* kinds) {
+  const size_t i = index_of(id);
+  if (i >= kNumMessages || !header_ok(kMessages[i])) return false;
+  const MessageDef& m = kMessages[i];
+  uint8_t k = kFirstPayloadSignal;
+  for (; kinds[k - kFirstPayloadSignal] != '\0'; ++k) {
+    if (k >= m.num_signals) return false;
+    const SignalDef& s = m.signals[k];
+    const char c = kinds[k - kFirstPayloadSignal];
+    if (!((c == 'c' && is_count(s)) || (c == 'p' && is_scaled(s)) || (c == 'a' && is_angle(s)))) return false;
+  }
+  return k == m.num_signals;
+}
+
+constexpr size_t count_payload_signals() {
+  size_t n = 0;
+  for (const MessageDef& m : kMessages) n += m.num_signals - kFirstPayloadSignal;
+  return n;
+}
+
+constexpr size_t kNumPayloadSignals = count_payload_signals();
+
+struct Layouts {
+  MessageLayout messages[kNumMessages];
+  SignalLayout signals[kNumPayloadSignals];
+};
+
+constexpr SignalLayout layout_from(const SignalDef& s) {
+  SignalLayout l{};
+  const bool scaled = is_scaled(s);
+  l.raw_min = scaled ? static_cast<int32_t>(raw_of(s, s.min)) : 0;
+  l.raw_max = scaled ? static_cast<int32_t>(raw_of(s, s.max)) : 0;
+  l.inv_factor = static_cast<uint16_t>(inv_factor_of(s));
+  l.raw_zero = static_cast<int16_t>(raw_zero_of(s));
+  l.start_bit = s.start_bit;
+  l.bit_len = s.bit_len;
+  l.is_signed = s.is_signed;
+  l.non_finite = s.non_finite;
+  return l;
+}
+
+constexpr Layouts make_layouts() {
+  Layouts l{};
+  size_t k = 0;
+  for (size_t i = 0; i < kNumMessages; ++i) {
+    const MessageDef& m = kMessages[i];
+    l.messages[i] = MessageLayout{static_cast<uint16_t>(m.id), m.data_id, m.dlc, static_cast<uint8_t>(k),
+                                  static_cast<uint8_t>(m.num_signals - kFirstPayloadSignal)};
+    for (uint8_t j = kFirstPayloadSignal; j < m.num_signals; ++j) l.signals[k++] = layout_from(m.signals[j]);
+  }
+  return l;
+}
+
+// The only table the firmware reads at run time (8 B per message, 16 B per signal).
+constexpr Layouts kLayouts = make_layouts();
+
+template <MsgId kId>
+const MessageLayout& layout() {
+  constexpr size_t i = index_of(kId);
+  static_assert(i < kNumMessages, "message missing from kMessages");
+  return kLayouts.messages[i];
+}
+
+// ---- Exact float <-> raw --------------------------------------------------
+
+// |v| = mantissa * 2^exponent for a finite float (subnormals included).
+struct FloatParts {
+  uint32_t mantissa;  // < 2^24
+  int exponent;       // -149..104
+  bool negative;
+};
+
+FloatParts split(float v) {
+  uint32_t bits = 0;
+  std::memcpy(&bits, &v, sizeof bits);
+  const uint32_t biased = (bits >> 23) & 0xFFU;
+  const uint32_t fraction = bits & 0x7FFFFFU;
+  FloatParts p{};
+  p.negative = (bits >> 31) != 0;
+  p.mantissa = biased == 0 ? fraction : (fraction | 0x800000U);
+  p.exponent = (biased == 0 ? 1 : static_cast<int>(biased)) - 150;
+  return p;
+}
+
+// Round half away from zero of y / 2^shift, 1 <= shift <= 62, |y| < 2^62.
+int64_t shift_round(int64_t y, int shift) {
+  const uint64_t mag = y < 0 ? 0U - static_cast<uint64_t>(y) : static_cast<uint64_t>(y);
+  const auto q = static_cast<int64_t>((mag + (uint64_t{1} << (shift - 1))) >> shift);
+  return y < 0 ? -q : q;
+}
+
+int64_t clip(const SignalLayout& s, int64_t raw, bool* flagged) {
+  if (raw < s.raw_min) {
+    *flagged = true;
+    return s.raw_min;
+  }
+  if (raw > s.raw_max) {
+    *flagged = true;
+    return s.raw_max;
+  }
+  return raw;
+}
+
+// 2*pi in units of 2^-60 rad, rounded to nearest (error 0.38 units < 2^-61 rad).
+constexpr uint64_t kTwoPiQ60 = 7244019458077122842ULL;
+// The largest float below pi: every float in [-kPiBelowF, kPiBelowF] is inside [-pi, pi].
+constexpr float kPiBelowF = 3.14159250F;
+static_assert(static_cast<double>(kPiBelowF) < kPi && static_cast<double>(kPiBelowF) + 0x1p-22 > kPi,
+              "kPiBelowF must be the float just below pi (ulp 2^-22 in [2, 4))");
 
 }  // namespace
 
-const MessageDef kMessages[] = {
-    {id_of(MsgId::kNavTime), "UWBNAV_NavTime", 8, data_id_for(MsgId::kNavTime), 10, true,
-     "Opens each 10 ms output group: the estimator time of the solution. PosXY, PosZ, VelHdg sent in the same cycle carry the same alive counter.",
-     kNavTimeSignals, count_of(kNavTimeSignals)},
-    {id_of(MsgId::kPosXY), "UWBNAV_PosXY", 8, data_id_for(MsgId::kPosXY), 10, true,
-     "Horizontal position of the body origin in the anchor frame, 1 mm, and the solution status.",
-     kPosXYSignals, count_of(kPosXYSignals)},
-    {id_of(MsgId::kPosZ), "UWBNAV_PosZ", 8, data_id_for(MsgId::kPosZ), 10, true,
-     "Vertical position and velocity, solution status, UWB ranges fused and rejected since the previous output.",
-     kPosZSignals, count_of(kPosZSignals)},
-    {id_of(MsgId::kVelHdg), "UWBNAV_VelHdg", 8, data_id_for(MsgId::kVelHdg), 10, true,
-     "Horizontal velocity in the navigation frame and heading.", kVelHdgSignals, count_of(kVelHdgSignals)},
-    {id_of(MsgId::kAccuracy), "UWBNAV_Accuracy", 8, data_id_for(MsgId::kAccuracy), 20, true,
-     "Claimed 1-sigma position accuracy and x/y correlation (cycle: parameter can.accuracy_period_ms, default 20 ms).",
-     kAccuracySignals, count_of(kAccuracySignals)},
-    {id_of(MsgId::kDiag), "UWBNAV_Diag", 8, data_id_for(MsgId::kDiag), 100, true,
-     "Diagnostics: per-anchor NLOS decisions, loop overruns, input rejects, filter resets.",
-     kDiagSignals, count_of(kDiagSignals)},
-    {id_of(MsgId::kHilImuTime), "HIL_ImuTime", 8, data_id_for(MsgId::kHilImuTime), 10, false,
-     "HIL input, IMU sample part 1 of 3 (time). The three parts of one sample carry the same alive counter.",
-     kHilImuTimeSignals, count_of(kHilImuTimeSignals)},
-    {id_of(MsgId::kHilImuAccel), "HIL_ImuAccel", 8, data_id_for(MsgId::kHilImuAccel), 10, false,
-     "HIL input, IMU sample part 2 of 3 (specific force).", kHilImuAccelSignals, count_of(kHilImuAccelSignals)},
-    {id_of(MsgId::kHilImuGyro), "HIL_ImuGyro", 8, data_id_for(MsgId::kHilImuGyro), 10, false,
-     "HIL input, IMU sample part 3 of 3 (angular rate).", kHilImuGyroSignals, count_of(kHilImuGyroSignals)},
-    {id_of(MsgId::kHilUwbRange), "HIL_UwbRange", 8, data_id_for(MsgId::kHilUwbRange), 0, false,
-     "HIL input, UWB range part 1 of 2 (anchor, tag, range). Both parts carry the same alive counter.",
-     kHilUwbRangeSignals, count_of(kHilUwbRangeSignals)},
-    {id_of(MsgId::kHilUwbTime), "HIL_UwbTime", 8, data_id_for(MsgId::kHilUwbTime), 0, false,
-     "HIL input, UWB range part 2 of 2 (time, channel powers).", kHilUwbTimeSignals, count_of(kHilUwbTimeSignals)},
-};
+const MessageLayout& layout_of(MsgId id) { return *find_layout(id_of(id)); }
 
-const size_t kNumMessages = sizeof(kMessages) / sizeof(kMessages[0]);
-
-const MessageDef* find_message(uint32_t id) {
-  for (size_t i = 0; i < kNumMessages; ++i) {
-    if (kMessages[i].id == id) return &kMessages[i];
+const MessageLayout* find_layout(uint32_t id) {
+  for (const MessageLayout& m : kLayouts.messages) {
+    if (m.id == id) return &m;
   }
   return nullptr;
 }
 
-int64_t to_raw(const SignalDef& s, double phys, bool* flagged) {
-  const int64_t raw_min = s.raw_min;
-  const int64_t raw_max = s.raw_max;
+const SignalLayout& signal_layout(const MessageLayout& m, uint8_t index) {
+  return kLayouts.signals[m.first_signal + index - kFirstPayloadSignal];
+}
+
+int64_t raw_from_phys(const SignalLayout& s, float phys, bool* flagged) {
   if (!std::isfinite(phys)) {
     switch (s.non_finite) {
       case NonFinite::kRawZeroNa:
         return 0;
       case NonFinite::kMaxFlagged:
         *flagged = true;
-        return raw_max;
+        return s.raw_max;
       case NonFinite::kZeroFlagged:
         break;
     }
     *flagged = true;
-    phys = 0.0;
+    return clip(s, s.raw_zero, flagged);
   }
-  const double r = std::round((phys - s.offset) / s.factor);
-  if (r < static_cast<double>(raw_min)) {
-    *flagged = true;
-    return raw_min;
+  // phys * inv_factor + raw_zero = +-mantissa * inv_factor * 2^exponent + raw_zero:
+  // an integer times a power of two, rounded by an exact shift.
+  const FloatParts p = split(phys);
+  const auto scaled = static_cast<int64_t>(uint64_t{p.mantissa} * s.inv_factor);  // < 2^40
+  const int64_t signed_scaled = p.negative ? -scaled : scaled;
+  int64_t raw = s.raw_zero;
+  if (p.exponent >= 0) {
+    // mantissa >= 2^23 here: beyond 2^20 the value exceeds every raw limit (2^24).
+    if (p.exponent > 20) return clip(s, p.negative ? INT64_MIN / 2 : INT64_MAX / 2, flagged);
+    raw = signed_scaled * (int64_t{1} << p.exponent) + s.raw_zero;
+  } else if (p.exponent >= -41) {
+    // Below 2^-41 the scaled value is < 2^40 * 2^-42 = 1/4 and rounds to raw_zero.
+    raw = shift_round(signed_scaled + s.raw_zero * (int64_t{1} << -p.exponent), -p.exponent);
   }
-  if (r > static_cast<double>(raw_max)) {
-    *flagged = true;
-    return raw_max;
-  }
-  return static_cast<int64_t>(r);
+  return clip(s, raw, flagged);
 }
 
-double to_phys(const SignalDef& s, int64_t raw) {
-  if (s.non_finite == NonFinite::kRawZeroNa && raw == 0) return std::nan("");
-  return static_cast<double>(raw) * s.factor + s.offset;
+int64_t raw_from_angle(const SignalLayout& s, float angle_rad, bool* flagged) {
+  if (!std::isfinite(angle_rad) || std::fabs(angle_rad) <= kPiBelowF) return raw_from_phys(s, angle_rad, flagged);
+  // |angle| > pi: a normal float m * 2^e with e >= -22. x = |angle| mod 2*pi in
+  // 2^-60 rad, by doubling m * 2^-22 (< 4 < 2*pi, exact in Q60) modulo 2*pi.
+  const FloatParts p = split(angle_rad);
+  uint64_t x = uint64_t{p.mantissa} << 38;
+  for (int e = -22; e < p.exponent; ++e) {
+    x <<= 1;  // x < 2*pi * 2^60 < 2^63: no overflow
+    if (x >= kTwoPiQ60) x -= kTwoPiQ60;
+  }
+  const bool above_pi = x > kTwoPiQ60 / 2;
+  const uint64_t mag = above_pi ? kTwoPiQ60 - x : x;  // |wrapped angle| in Q60, <= pi
+  const bool negative = p.negative != above_pi;
+  // Round half away of mag * inv_factor / 2^60 without a 128-bit product:
+  // floor((hi * 2^32 + lo) / 2^60) = floor((hi + floor(lo / 2^32)) / 2^28).
+  const uint64_t lo = (mag & 0xFFFFFFFFU) * s.inv_factor + (uint64_t{1} << 59);
+  const auto q = static_cast<int64_t>(((mag >> 32) * s.inv_factor + (lo >> 32)) >> 28);
+  return clip(s, negative ? -q : q, flagged);
+}
+
+int64_t raw_from_count(const SignalLayout& s, uint64_t count, bool* flagged) {
+  const uint64_t max = (uint64_t{1} << s.bit_len) - 1U;  // count signals are <= 53 bits wide
+  if (count > max) {
+    *flagged = true;
+    return static_cast<int64_t>(max);
+  }
+  return static_cast<int64_t>(count);
+}
+
+float phys_from_raw(const SignalLayout& s, int64_t raw) {
+  if (s.non_finite == NonFinite::kRawZeroNa && raw == 0) return std::numeric_limits<float>::quiet_NaN();
+  // |raw - raw_zero| <= 2^24 for scaled signals: exact in float.
+  return static_cast<float>(static_cast<int32_t>(raw - s.raw_zero)) / static_cast<float>(s.inv_factor);
+}
+
+int64_t read_raw(const SignalLayout& s, const uint8_t* data) {
+  const uint64_t raw = get_bits(data, s.start_bit, s.bit_len);
+  if (s.is_signed && s.bit_len < 64 && ((raw >> (s.bit_len - 1)) & 1U) != 0) {
+    return static_cast<int64_t>(raw | ~((uint64_t{1} << s.bit_len) - 1U));
+  }
+  return static_cast<int64_t>(raw);
 }
 
 void put_bits(uint8_t* data, uint8_t start_bit, uint8_t bit_len, uint64_t raw) {
@@ -250,235 +292,293 @@ uint64_t get_bits(const uint8_t* data, uint8_t start_bit, uint8_t bit_len) {
   return raw;
 }
 
-bool pack_message(const MessageDef& m, const double* phys, uint8_t counter, hal::CanFrame& out) {
-  out.id = m.id;
-  out.len = m.dlc;
-  out.flags = 0;
-  for (auto& b : out.data) b = 0;
-  bool saturated = false;
-  for (uint8_t i = kSigSaturated + 1; i < m.num_signals; ++i) {
-    const SignalDef& s = m.signals[i];
-    const int64_t raw = to_raw(s, phys[i], &saturated);
-    const uint64_t mask = s.bit_len >= 64 ? ~uint64_t{0} : ((uint64_t{1} << s.bit_len) - 1U);
-    put_bits(out.data, s.start_bit, s.bit_len, static_cast<uint64_t>(raw) & mask);
-  }
-  put_bits(out.data, m.signals[kSigSaturated].start_bit, 1, saturated ? 1U : 0U);
-  e2e_protect(m.data_id, counter, out.data, out.len);
-  return saturated;
-}
-
-void unpack_message(const MessageDef& m, const hal::CanFrame& f, double* phys) {
-  for (uint8_t i = 0; i < m.num_signals; ++i) {
-    const SignalDef& s = m.signals[i];
-    uint64_t raw = get_bits(f.data, s.start_bit, s.bit_len);
-    int64_t value = static_cast<int64_t>(raw);
-    if (s.is_signed && s.bit_len < 64 && ((raw >> (s.bit_len - 1)) & 1U) != 0) {
-      value = static_cast<int64_t>(raw | ~((uint64_t{1} << s.bit_len) - 1U));
-    }
-    phys[i] = to_phys(s, value);
-  }
-}
-
-double wrap_pi(double angle_rad) {
-  if (!std::isfinite(angle_rad)) return angle_rad;
-  double a = std::fmod(angle_rad + kPi, 2.0 * kPi);
-  if (a < 0.0) a += 2.0 * kPi;
-  return a - kPi;
-}
-
 namespace {
 
-bool encode_values(MsgId id, const double* phys, uint8_t counter, hal::CanFrame& out) {
-  return pack_message(*find_message(id_of(id)), phys, counter, out);
-}
-
-Status decode_values(const hal::CanFrame& f, MsgId id, double* phys, FrameMeta* meta) {
-  const MessageDef& m = *find_message(id_of(id));
-  if (f.id != m.id || f.len != m.dlc || (f.flags & (hal::CanFrame::kFlagExtended | hal::CanFrame::kFlagError)) != 0) {
-    return Status::kInvalidArgument;
+// Packs the payload signals of one message in table order, then the Saturated
+// flag, the alive counter and the CRC.
+class Packer {
+ public:
+  Packer(const MessageLayout& m, hal::CanFrame& out) : m_(m), next_(&kLayouts.signals[m.first_signal]), out_(out) {
+    out.id = m.id;
+    out.len = m.dlc;
+    out.flags = 0;
+    std::memset(out.data, 0, sizeof out.data);
   }
-  if (e2e_crc(m.data_id, f.data, f.len) != f.data[kCrcByte]) return Status::kRejected;
-  const uint8_t counter = f.data[kCounterByte] & kCounterMask;
-  if (counter > kAliveCounterMax) return Status::kOutOfRange;
-  unpack_message(m, f, phys);
-  if (meta != nullptr) {
-    meta->counter = counter;
-    meta->saturated = phys[kSigSaturated] != 0.0;
+  void phys(float v) { put(raw_from_phys(*next_, v, &saturated_)); }
+  void angle(float v) { put(raw_from_angle(*next_, v, &saturated_)); }
+  void count(uint64_t v) { put(raw_from_count(*next_, v, &saturated_)); }
+  bool finish(uint8_t counter) {
+    put_bits(out_.data, 15, 1, saturated_ ? 1U : 0U);  // kSigSaturated
+    e2e_protect(m_.data_id, counter, out_.data, out_.len);
+    return saturated_;
   }
-  return Status::kOk;
-}
 
-float f32(double v) { return static_cast<float>(v); }
-double f64(float v) { return static_cast<double>(v); }
+ private:
+  void put(int64_t raw) {
+    const uint64_t mask = (uint64_t{1} << next_->bit_len) - 1U;
+    put_bits(out_.data, next_->start_bit, next_->bit_len, static_cast<uint64_t>(raw) & mask);
+    ++next_;
+  }
 
-NavStatus status_from(double v) { return static_cast<NavStatus>(static_cast<uint8_t>(v) & 0x3U); }
+  const MessageLayout& m_;
+  const SignalLayout* next_;
+  hal::CanFrame& out_;
+  bool saturated_ = false;
+};
+
+// Checks one received frame (id, length, CRC, counter) and reads its payload
+// signals in table order.
+class Unpacker {
+ public:
+  Unpacker(const MessageLayout& m, const hal::CanFrame& f) : m_(m), next_(&kLayouts.signals[m.first_signal]), f_(f) {}
+
+  Status check(FrameMeta* meta) const {
+    if (f_.id != m_.id || f_.len != m_.dlc ||
+        (f_.flags & (hal::CanFrame::kFlagExtended | hal::CanFrame::kFlagError)) != 0) {
+      return Status::kInvalidArgument;
+    }
+    if (e2e_crc(m_.data_id, f_.data, f_.len) != f_.data[kCrcByte]) return Status::kRejected;
+    const uint8_t counter = f_.data[kCounterByte] & kCounterMask;
+    if (counter > kAliveCounterMax) return Status::kOutOfRange;
+    if (meta != nullptr) {
+      meta->counter = counter;
+      meta->saturated = (f_.data[kCounterByte] & 0x80U) != 0;  // kSigSaturated, bit 15
+    }
+    return Status::kOk;
+  }
+  float phys() {
+    const SignalLayout& s = *next_++;
+    return phys_from_raw(s, read_raw(s, f_.data));
+  }
+  uint64_t count() { return static_cast<uint64_t>(read_raw(*next_++, f_.data)); }
+
+ private:
+
+  const MessageLayout& m_;
+  const SignalLayout* next_;
+  const hal::CanFrame& f_;
+};
+
+// Payload kinds per message, in table order: the typed functions below call
+// Packer/Unpacker in exactly this order.
+static_assert(kinds_are(MsgId::kNavTime, "c"));
+static_assert(kinds_are(MsgId::kPosXY, "cpp"));
+static_assert(kinds_are(MsgId::kPosZ, "cppcc"));
+static_assert(kinds_are(MsgId::kVelHdg, "ppa"));
+static_assert(kinds_are(MsgId::kAccuracy, "pppp"));
+static_assert(kinds_are(MsgId::kDiag, "cccc"));
+static_assert(kinds_are(MsgId::kHilImuTime, "c"));
+static_assert(kinds_are(MsgId::kHilImuAccel, "ppp"));
+static_assert(kinds_are(MsgId::kHilImuGyro, "ppp"));
+static_assert(kinds_are(MsgId::kHilUwbRange, "ccp"));
+static_assert(kinds_are(MsgId::kHilUwbTime, "cpp"));
+static_assert(kNumMessages == 11, "a new message needs its kinds_are() line and typed encode/decode");
+
+NavStatus status_from(uint64_t v) { return static_cast<NavStatus>(v & 0x3U); }
 
 }  // namespace
 
 bool encode(const NavTimeMsg& m, uint8_t counter, hal::CanFrame& out) {
-  const double v[] = {0, 0, 0, static_cast<double>(m.nav_t_us)};
-  return encode_values(MsgId::kNavTime, v, counter, out);
+  Packer p(layout<MsgId::kNavTime>(), out);
+  p.count(m.nav_t_us);
+  return p.finish(counter);
 }
 
 bool encode(const PosXYMsg& m, uint8_t counter, hal::CanFrame& out) {
-  const double v[] = {0, 0, 0, static_cast<double>(m.status), f64(m.x_nav_m), f64(m.y_nav_m)};
-  return encode_values(MsgId::kPosXY, v, counter, out);
+  Packer p(layout<MsgId::kPosXY>(), out);
+  p.count(static_cast<uint8_t>(m.status));
+  p.phys(m.x_nav_m);
+  p.phys(m.y_nav_m);
+  return p.finish(counter);
 }
 
 bool encode(const PosZMsg& m, uint8_t counter, hal::CanFrame& out) {
-  const double v[] = {0, 0, 0, static_cast<double>(m.status), f64(m.z_nav_m), f64(m.vz_nav_mps),
-                      static_cast<double>(m.ranges_used), static_cast<double>(m.ranges_rejected)};
-  return encode_values(MsgId::kPosZ, v, counter, out);
+  Packer p(layout<MsgId::kPosZ>(), out);
+  p.count(static_cast<uint8_t>(m.status));
+  p.phys(m.z_nav_m);
+  p.phys(m.vz_nav_mps);
+  p.count(m.ranges_used);
+  p.count(m.ranges_rejected);
+  return p.finish(counter);
 }
 
 bool encode(const VelHdgMsg& m, uint8_t counter, hal::CanFrame& out) {
-  const double v[] = {0, 0, 0, f64(m.vx_nav_mps), f64(m.vy_nav_mps), wrap_pi(f64(m.heading_rad))};
-  return encode_values(MsgId::kVelHdg, v, counter, out);
+  Packer p(layout<MsgId::kVelHdg>(), out);
+  p.phys(m.vx_nav_mps);
+  p.phys(m.vy_nav_mps);
+  p.angle(m.heading_rad);
+  return p.finish(counter);
 }
 
 bool encode(const AccuracyMsg& m, uint8_t counter, hal::CanFrame& out) {
-  const double v[] = {0, 0, 0, f64(m.sigma_x_m), f64(m.sigma_y_m), f64(m.sigma_z_m), f64(m.corr_xy)};
-  return encode_values(MsgId::kAccuracy, v, counter, out);
+  Packer p(layout<MsgId::kAccuracy>(), out);
+  p.phys(m.sigma_x_m);
+  p.phys(m.sigma_y_m);
+  p.phys(m.sigma_z_m);
+  p.phys(m.corr_xy);
+  return p.finish(counter);
 }
 
 bool encode(const DiagMsg& m, uint8_t counter, hal::CanFrame& out) {
-  const double v[] = {0, 0, 0, static_cast<double>(m.resets), static_cast<double>(m.nlos_mask),
-                      static_cast<double>(m.overruns), static_cast<double>(m.input_rejects)};
-  return encode_values(MsgId::kDiag, v, counter, out);
+  Packer p(layout<MsgId::kDiag>(), out);
+  p.count(m.resets);
+  p.count(m.nlos_mask);
+  p.count(m.overruns);
+  p.count(m.input_rejects);
+  return p.finish(counter);
 }
 
 bool encode(const HilImuTimeMsg& m, uint8_t counter, hal::CanFrame& out) {
-  const double v[] = {0, 0, 0, static_cast<double>(m.t_sensor_us)};
-  return encode_values(MsgId::kHilImuTime, v, counter, out);
+  Packer p(layout<MsgId::kHilImuTime>(), out);
+  p.count(m.t_sensor_us);
+  return p.finish(counter);
 }
 
 bool encode(const HilImuAccelMsg& m, uint8_t counter, hal::CanFrame& out) {
-  const Vec3f& a = m.accel_body_mps2;
-  const double v[] = {0, 0, 0, f64(a.x), f64(a.y), f64(a.z)};
-  return encode_values(MsgId::kHilImuAccel, v, counter, out);
+  Packer p(layout<MsgId::kHilImuAccel>(), out);
+  p.phys(m.accel_body_mps2.x);
+  p.phys(m.accel_body_mps2.y);
+  p.phys(m.accel_body_mps2.z);
+  return p.finish(counter);
 }
 
 bool encode(const HilImuGyroMsg& m, uint8_t counter, hal::CanFrame& out) {
-  const Vec3f& g = m.gyro_body_radps;
-  const double v[] = {0, 0, 0, f64(g.x), f64(g.y), f64(g.z)};
-  return encode_values(MsgId::kHilImuGyro, v, counter, out);
+  Packer p(layout<MsgId::kHilImuGyro>(), out);
+  p.phys(m.gyro_body_radps.x);
+  p.phys(m.gyro_body_radps.y);
+  p.phys(m.gyro_body_radps.z);
+  return p.finish(counter);
 }
 
 bool encode(const HilUwbRangeMsg& m, uint8_t counter, hal::CanFrame& out) {
-  const double v[] = {0, 0, 0, static_cast<double>(m.anchor_id), static_cast<double>(m.tag_id), f64(m.range_m)};
-  return encode_values(MsgId::kHilUwbRange, v, counter, out);
+  Packer p(layout<MsgId::kHilUwbRange>(), out);
+  p.count(m.anchor_id);
+  p.count(m.tag_id);
+  p.phys(m.range_m);
+  return p.finish(counter);
 }
 
 bool encode(const HilUwbTimeMsg& m, uint8_t counter, hal::CanFrame& out) {
-  const double v[] = {0, 0, 0, static_cast<double>(m.t_sensor_us), f64(m.fp_power_dbm), f64(m.rx_power_dbm)};
-  return encode_values(MsgId::kHilUwbTime, v, counter, out);
+  Packer p(layout<MsgId::kHilUwbTime>(), out);
+  p.count(m.t_sensor_us);
+  p.phys(m.fp_power_dbm);
+  p.phys(m.rx_power_dbm);
+  return p.finish(counter);
 }
 
 Status decode(const hal::CanFrame& f, NavTimeMsg& m, FrameMeta* meta) {
-  double v[kMaxSignals] = {};
-  const Status s = decode_values(f, MsgId::kNavTime, v, meta);
-  if (s == Status::kOk) m.nav_t_us = static_cast<uint64_t>(v[3]);
+  Unpacker u(layout<MsgId::kNavTime>(), f);
+  const Status s = u.check(meta);
+  if (s == Status::kOk) m.nav_t_us = u.count();
   return s;
 }
 
 Status decode(const hal::CanFrame& f, PosXYMsg& m, FrameMeta* meta) {
-  double v[kMaxSignals] = {};
-  const Status s = decode_values(f, MsgId::kPosXY, v, meta);
+  Unpacker u(layout<MsgId::kPosXY>(), f);
+  const Status s = u.check(meta);
   if (s == Status::kOk) {
-    m.status = status_from(v[3]);
-    m.x_nav_m = f32(v[4]);
-    m.y_nav_m = f32(v[5]);
+    m.status = status_from(u.count());
+    m.x_nav_m = u.phys();
+    m.y_nav_m = u.phys();
   }
   return s;
 }
 
 Status decode(const hal::CanFrame& f, PosZMsg& m, FrameMeta* meta) {
-  double v[kMaxSignals] = {};
-  const Status s = decode_values(f, MsgId::kPosZ, v, meta);
+  Unpacker u(layout<MsgId::kPosZ>(), f);
+  const Status s = u.check(meta);
   if (s == Status::kOk) {
-    m.status = status_from(v[3]);
-    m.z_nav_m = f32(v[4]);
-    m.vz_nav_mps = f32(v[5]);
-    m.ranges_used = static_cast<uint16_t>(v[6]);
-    m.ranges_rejected = static_cast<uint16_t>(v[7]);
+    m.status = status_from(u.count());
+    m.z_nav_m = u.phys();
+    m.vz_nav_mps = u.phys();
+    m.ranges_used = static_cast<uint16_t>(u.count());
+    m.ranges_rejected = static_cast<uint16_t>(u.count());
   }
   return s;
 }
 
 Status decode(const hal::CanFrame& f, VelHdgMsg& m, FrameMeta* meta) {
-  double v[kMaxSignals] = {};
-  const Status s = decode_values(f, MsgId::kVelHdg, v, meta);
+  Unpacker u(layout<MsgId::kVelHdg>(), f);
+  const Status s = u.check(meta);
   if (s == Status::kOk) {
-    m.vx_nav_mps = f32(v[3]);
-    m.vy_nav_mps = f32(v[4]);
-    m.heading_rad = f32(v[5]);
+    m.vx_nav_mps = u.phys();
+    m.vy_nav_mps = u.phys();
+    m.heading_rad = u.phys();
   }
   return s;
 }
 
 Status decode(const hal::CanFrame& f, AccuracyMsg& m, FrameMeta* meta) {
-  double v[kMaxSignals] = {};
-  const Status s = decode_values(f, MsgId::kAccuracy, v, meta);
+  Unpacker u(layout<MsgId::kAccuracy>(), f);
+  const Status s = u.check(meta);
   if (s == Status::kOk) {
-    m.sigma_x_m = f32(v[3]);
-    m.sigma_y_m = f32(v[4]);
-    m.sigma_z_m = f32(v[5]);
-    m.corr_xy = f32(v[6]);
+    m.sigma_x_m = u.phys();
+    m.sigma_y_m = u.phys();
+    m.sigma_z_m = u.phys();
+    m.corr_xy = u.phys();
   }
   return s;
 }
 
 Status decode(const hal::CanFrame& f, DiagMsg& m, FrameMeta* meta) {
-  double v[kMaxSignals] = {};
-  const Status s = decode_values(f, MsgId::kDiag, v, meta);
+  Unpacker u(layout<MsgId::kDiag>(), f);
+  const Status s = u.check(meta);
   if (s == Status::kOk) {
-    m.resets = static_cast<uint32_t>(v[3]);
-    m.nlos_mask = static_cast<uint16_t>(v[4]);
-    m.overruns = static_cast<uint64_t>(v[5]);
-    m.input_rejects = static_cast<uint32_t>(v[6]);
+    m.resets = static_cast<uint32_t>(u.count());
+    m.nlos_mask = static_cast<uint16_t>(u.count());
+    m.overruns = u.count();
+    m.input_rejects = static_cast<uint32_t>(u.count());
   }
   return s;
 }
 
 Status decode(const hal::CanFrame& f, HilImuTimeMsg& m, FrameMeta* meta) {
-  double v[kMaxSignals] = {};
-  const Status s = decode_values(f, MsgId::kHilImuTime, v, meta);
-  if (s == Status::kOk) m.t_sensor_us = static_cast<uint32_t>(v[3]);
+  Unpacker u(layout<MsgId::kHilImuTime>(), f);
+  const Status s = u.check(meta);
+  if (s == Status::kOk) m.t_sensor_us = static_cast<uint32_t>(u.count());
   return s;
 }
 
 Status decode(const hal::CanFrame& f, HilImuAccelMsg& m, FrameMeta* meta) {
-  double v[kMaxSignals] = {};
-  const Status s = decode_values(f, MsgId::kHilImuAccel, v, meta);
-  if (s == Status::kOk) m.accel_body_mps2 = Vec3f{f32(v[3]), f32(v[4]), f32(v[5])};
+  Unpacker u(layout<MsgId::kHilImuAccel>(), f);
+  const Status s = u.check(meta);
+  if (s == Status::kOk) {
+    m.accel_body_mps2.x = u.phys();
+    m.accel_body_mps2.y = u.phys();
+    m.accel_body_mps2.z = u.phys();
+  }
   return s;
 }
 
 Status decode(const hal::CanFrame& f, HilImuGyroMsg& m, FrameMeta* meta) {
-  double v[kMaxSignals] = {};
-  const Status s = decode_values(f, MsgId::kHilImuGyro, v, meta);
-  if (s == Status::kOk) m.gyro_body_radps = Vec3f{f32(v[3]), f32(v[4]), f32(v[5])};
+  Unpacker u(layout<MsgId::kHilImuGyro>(), f);
+  const Status s = u.check(meta);
+  if (s == Status::kOk) {
+    m.gyro_body_radps.x = u.phys();
+    m.gyro_body_radps.y = u.phys();
+    m.gyro_body_radps.z = u.phys();
+  }
   return s;
 }
 
 Status decode(const hal::CanFrame& f, HilUwbRangeMsg& m, FrameMeta* meta) {
-  double v[kMaxSignals] = {};
-  const Status s = decode_values(f, MsgId::kHilUwbRange, v, meta);
+  Unpacker u(layout<MsgId::kHilUwbRange>(), f);
+  const Status s = u.check(meta);
   if (s == Status::kOk) {
-    m.anchor_id = static_cast<uint16_t>(v[3]);
-    m.tag_id = static_cast<uint8_t>(v[4]);
-    m.range_m = f32(v[5]);
+    m.anchor_id = static_cast<uint16_t>(u.count());
+    m.tag_id = static_cast<uint8_t>(u.count());
+    m.range_m = u.phys();
   }
   return s;
 }
 
 Status decode(const hal::CanFrame& f, HilUwbTimeMsg& m, FrameMeta* meta) {
-  double v[kMaxSignals] = {};
-  const Status s = decode_values(f, MsgId::kHilUwbTime, v, meta);
+  Unpacker u(layout<MsgId::kHilUwbTime>(), f);
+  const Status s = u.check(meta);
   if (s == Status::kOk) {
-    m.t_sensor_us = static_cast<uint32_t>(v[3]);
-    m.fp_power_dbm = f32(v[4]);
-    m.rx_power_dbm = f32(v[5]);
+    m.t_sensor_us = static_cast<uint32_t>(u.count());
+    m.fp_power_dbm = u.phys();
+    m.rx_power_dbm = u.phys();
   }
   return s;
 }

@@ -1,6 +1,8 @@
-// The uwbnav CAN message set: one constexpr table of messages and signals (the
-// source docs/uwbnav.dbc is generated from), a generic Intel-order packer that
-// saturates and flags out-of-range values, and typed encode/decode per message.
+// The uwbnav CAN codec: a compact run-time layout derived at compile time from
+// the message table (firmware/can/message_table.hpp, the source of
+// docs/uwbnav.dbc), an Intel-order packer that saturates and flags out-of-range
+// values, and typed encode/decode per message. No double at run time: physical
+// values are float, raw values integers, and float <-> raw is exact.
 #pragma once
 
 #include <cstddef>
@@ -8,110 +10,64 @@
 
 #include "estimator/status.hpp"
 #include "estimator/types.hpp"
+#include "firmware/can/message_table.hpp"
 #include "hal/hal.hpp"
 
 namespace uwbnav::can {
 
-// 11-bit identifiers (docs/can.md). Outputs 0x100..0x105, HIL inputs 0x0A0..0x0B1.
-enum class MsgId : uint16_t {
-  kNavTime = 0x100,      // output: time of the solution the 10 ms group belongs to
-  kPosXY = 0x101,        // output: horizontal position + status
-  kPosZ = 0x102,         // output: vertical position/velocity + status + range counts
-  kVelHdg = 0x103,       // output: horizontal velocity + heading
-  kAccuracy = 0x104,     // output: 1-sigma x/y/z + xy correlation
-  kDiag = 0x105,         // output: NLOS mask, overruns, input rejects, resets
-  kHilImuTime = 0x0A0,   // HIL input: IMU sample timestamp
-  kHilImuAccel = 0x0A1,  // HIL input: IMU specific force
-  kHilImuGyro = 0x0A2,   // HIL input: IMU angular rate
-  kHilUwbRange = 0x0B0,  // HIL input: UWB range, anchor, tag
-  kHilUwbTime = 0x0B1,   // HIL input: UWB range timestamp + channel powers
-};
-
-constexpr uint32_t id_of(MsgId m) { return static_cast<uint32_t>(m); }
-
-// What a signal encodes when its physical value is NaN/Inf.
-enum class NonFinite : uint8_t {
-  kZeroFlagged = 0,  // raw for physical 0 (clipped into range), Saturated flag set
-  kMaxFlagged,       // raw maximum (e.g. an unknown sigma is "worst"), Saturated flag set
-  kRawZeroNa,        // raw 0 is the "not available" code; no flag; decodes to NaN
-};
-
-struct ValueName {
-  int value;
-  const char* name;
-};
-
-// One signal, Intel (little-endian) byte order: start_bit is the LSB position,
-// bit index = byte * 8 + bit-in-byte. physical = raw * factor + offset.
-// Round half away from zero (std::llround) in a constant expression: v minus
-// its truncation is exact in double for |v| < 2^52.
-constexpr int64_t round_half_away(double v) {
-  const auto t = static_cast<int64_t>(v);
-  const double frac = v - static_cast<double>(t);
-  return frac >= 0.5 ? t + 1 : (frac <= -0.5 ? t - 1 : t);
-}
-
-struct SignalDef {
-  const char* name;
+// Run-time layout of one payload signal (table index >= kFirstPayloadSignal),
+// derived from its SignalDef at compile time; messages.cpp checks with
+// static_assert that 1 / factor and offset / factor are integers, so
+//   raw = round half away from zero of (physical * inv_factor + raw_zero)
+// is exactly the table's round((physical - offset) / factor).
+struct SignalLayout {
+  // Raw limits round((min|max - offset) / factor) of scaled signals (|raw| <= 2^24).
+  // Count signals (factor 1, offset 0, min 0, max = field maximum: checked at
+  // compile time) clip to the field maximum instead and store 0 here.
+  int32_t raw_min;
+  int32_t raw_max;
+  uint16_t inv_factor;  // 1 / factor
+  int16_t raw_zero;     // raw of physical 0: -offset / factor
   uint8_t start_bit;
   uint8_t bit_len;
   bool is_signed;
-  double factor;
-  double offset;
-  double min;  // physical limits; encoding clips to them and sets the Saturated flag
-  double max;
-  const char* unit;
-  const char* comment;
   NonFinite non_finite;
-  const ValueName* values;  // value table (DBC VAL_), nullptr when none
-  uint8_t num_values;
-  // Raw limits llround((min|max - offset) / factor), computed with the table
-  // at compile time: the encoder would otherwise divide in double (a library
-  // call on a single-precision FPU) twice per signal and frame.
-  int64_t raw_min = round_half_away((min - offset) / factor);
-  int64_t raw_max = round_half_away((max - offset) / factor);
 };
 
-struct MessageDef {
-  uint32_t id;
-  const char* name;
-  uint8_t dlc;           // bytes
-  uint16_t data_id;      // E2E data ID (DBC attribute E2EDataID)
-  uint16_t cycle_ms;     // nominal cycle (DBC GenMsgCycleTime), 0 = event driven
-  bool from_uwbnav;      // transmitter: true = UWBNAV node, false = HIL_RIG
-  const char* comment;
-  const SignalDef* signals;
-  uint8_t num_signals;
+struct MessageLayout {
+  uint16_t id;            // 11-bit CAN id
+  uint16_t data_id;       // E2E data ID
+  uint8_t dlc;            // bytes
+  uint8_t first_signal;   // index of its first payload signal in the layout array
+  uint8_t num_payload;    // signals after the E2E header
 };
 
-// Every message starts with the same three header signals at these indices.
-constexpr uint8_t kSigCrc = 0;        // bits 0..7
-constexpr uint8_t kSigCounter = 1;    // bits 8..11
-constexpr uint8_t kSigSaturated = 2;  // bit 15
-constexpr uint8_t kMaxSignals = 8;
+// Layout of a message of the table; nullptr from find_layout() for an unknown id.
+const MessageLayout& layout_of(MsgId id);
+const MessageLayout* find_layout(uint32_t id);
+// Layout of signal `index` of message `m` (index as in MessageDef::signals,
+// kFirstPayloadSignal <= index < kFirstPayloadSignal + m.num_payload).
+const SignalLayout& signal_layout(const MessageLayout& m, uint8_t index);
 
-extern const MessageDef kMessages[];
-extern const size_t kNumMessages;
-
-const MessageDef* find_message(uint32_t id);
-
-// Clips/quantizes one physical value to the signal's raw integer.
-// Sets *flagged when the value was clipped or not finite (see NonFinite).
-int64_t to_raw(const SignalDef& s, double phys, bool* flagged);
-double to_phys(const SignalDef& s, int64_t raw);
+// Physical value -> raw integer, clipped to the raw limits. Sets *flagged when
+// the value was clipped or not finite (see NonFinite). Exact: no float rounding
+// happens between the physical value and its rounded raw value.
+int64_t raw_from_phys(const SignalLayout& s, float phys, bool* flagged);
+// Angle [rad] -> raw: wrapped to [-pi, pi] first. Values in [-pi, pi] are used
+// as they are; others are reduced modulo 2*pi in 2^-60 rad fixed point, then
+// rounded exactly (error of the reduction < n * 2^-61 rad after n turns).
+int64_t raw_from_angle(const SignalLayout& s, float angle_rad, bool* flagged);
+// Count (factor 1, offset 0) -> raw, clipped to the field maximum.
+int64_t raw_from_count(const SignalLayout& s, uint64_t count, bool* flagged);
+// Raw -> physical: the float nearest to (raw - raw_zero) / inv_factor (one
+// correctly rounded division); NaN for raw 0 of a kRawZeroNa signal.
+float phys_from_raw(const SignalLayout& s, int64_t raw);
+// Raw value of signal `s` in a payload, sign-extended for signed signals.
+int64_t read_raw(const SignalLayout& s, const uint8_t* data);
 
 // Writes/reads raw bits (Intel order) into/from an 8..64 byte payload.
 void put_bits(uint8_t* data, uint8_t start_bit, uint8_t bit_len, uint64_t raw);
 uint64_t get_bits(const uint8_t* data, uint8_t start_bit, uint8_t bit_len);
-
-// Packs phys[i] for every non-header signal i of `m` (phys[0..2] ignored),
-// sets the Saturated flag when any value was clipped, then the alive counter
-// and the CRC. Returns the Saturated flag.
-bool pack_message(const MessageDef& m, const double* phys, uint8_t counter, hal::CanFrame& out);
-
-// Unpacks every signal of `m` (header included) to physical values.
-// Does not check the CRC (see E2eReceiver / decode_*).
-void unpack_message(const MessageDef& m, const hal::CanFrame& f, double* phys);
 
 // ---- Typed messages (physical values, units in the names) -----------------
 
@@ -198,8 +154,5 @@ bool encode(const HilUwbTimeMsg& m, uint8_t counter, hal::CanFrame& out);
 [[nodiscard]] Status decode(const hal::CanFrame& f, HilImuGyroMsg& m, FrameMeta* meta = nullptr);
 [[nodiscard]] Status decode(const hal::CanFrame& f, HilUwbRangeMsg& m, FrameMeta* meta = nullptr);
 [[nodiscard]] Status decode(const hal::CanFrame& f, HilUwbTimeMsg& m, FrameMeta* meta = nullptr);
-
-// Wraps an angle to [-pi, pi] [rad].
-double wrap_pi(double angle_rad);
 
 }  // namespace uwbnav::can

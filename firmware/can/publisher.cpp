@@ -8,8 +8,12 @@
 namespace uwbnav::can {
 namespace {
 
+// Rounds ms to whole 10 ms ticks (half away from zero) in float, no double:
+// the float quotient ms / 10 is correctly rounded and lands on a half tick only
+// when the exact quotient is one (neighbouring float ms values lie over 8 ulps
+// of ms / 10 apart), so the result is the rounding of the exact quotient, as before.
 uint32_t period_us_from_ms(float ms) {
-  const long ticks = std::lround(static_cast<double>(ms) / 10.0);
+  const long ticks = std::lround(ms / 10.0F);
   return static_cast<uint32_t>(ticks < 1 ? 1 : ticks) * kCanTickUs;
 }
 

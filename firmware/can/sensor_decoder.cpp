@@ -55,7 +55,7 @@ void CanSensorDecoder::reset() {
   stats_ = CanSensorStats{};
 }
 
-Status CanSensorDecoder::check(size_t input, const MessageDef& m, const hal::CanFrame& f) {
+Status CanSensorDecoder::check(size_t input, const MessageLayout& m, const hal::CanFrame& f) {
   ++stats_.frames;
   if ((f.flags & (hal::CanFrame::kFlagExtended | hal::CanFrame::kFlagError)) != 0) {
     ++stats_.length_errors;
@@ -90,7 +90,7 @@ Status CanSensorDecoder::check(size_t input, const MessageDef& m, const hal::Can
 Status CanSensorDecoder::on_frame(const hal::CanFrame& f, uint64_t now_us, CanSensorSample& out) {
   for (size_t i = 0; i < kNumInputs; ++i) {
     if (f.id != kInputIds[i]) continue;
-    const Status s = check(i, *find_message(f.id), f);
+    const Status s = check(i, *find_layout(f.id), f);
     if (s != Status::kOk) return s;
     if (i < kImuFrames) return on_imu_part(i, f, now_us, out);
     return on_uwb_part(i - kImuFrames, f, now_us, out);

@@ -75,7 +75,7 @@ class CanSensorDecoder {
 
  private:
   static constexpr size_t kNumInputs = 5;
-  Status check(size_t input, const MessageDef& m, const hal::CanFrame& f);
+  Status check(size_t input, const MessageLayout& m, const hal::CanFrame& f);
   Status on_imu_part(size_t part, const hal::CanFrame& f, uint64_t now_us, CanSensorSample& out);
   Status on_uwb_part(size_t part, const hal::CanFrame& f, uint64_t now_us, CanSensorSample& out);
 

@@ -1,6 +1,7 @@
-// docs/uwbnav.dbc is generated from the firmware message table: this test
-// regenerates it in memory and fails when the committed file differs
-// (UWBNAV_WRITE_DBC=1 rewrites the file), and checks the table itself.
+// docs/uwbnav.dbc is generated from the firmware message table
+// (firmware/can/message_table.hpp): this test regenerates it in memory and fails
+// when the committed file differs (UWBNAV_WRITE_DBC=1 rewrites the file), and
+// checks the table itself and the run-time layout the codec derives from it.
 #include <gtest/gtest.h>
 
 #include <charconv>
@@ -43,7 +44,7 @@ std::string make_dbc() {
     o << '\n';
   }
   o << '\n';
-  o << "CM_ \"uwbnav CAN interface (docs/can.md). GENERATED from firmware/can/messages.cpp by "
+  o << "CM_ \"uwbnav CAN interface (docs/can.md). GENERATED from firmware/can/message_table.hpp by "
        "tests/can/test_dbc.cpp - do not edit; regenerate with UWBNAV_WRITE_DBC=1 uwbnav_tests_can "
        "--gtest_filter=CanDbc.*. Every frame: byte 0 = CRC-8 SAE J1850 (poly 0x1D, init 0xFF, xor 0xFF) over "
        "E2EDataID low byte, E2EDataID high byte, bytes 1..7; byte 1 bits 0..3 = alive counter 0..14.\";\n";
@@ -122,15 +123,39 @@ TEST(CanDbc, SignalsFitTheFrameAndNeverOverlap) {
   }
 }
 
-TEST(CanDbc, PrecomputedRawLimitsEqualLlroundOfThePhysicalLimits) {
+TEST(CanDbc, RuntimeLayoutIsTheTableWithRawLimitsEqualToLlroundOfThePhysicalLimits) {
   for (size_t i = 0; i < kNumMessages; ++i) {
     const MessageDef& m = kMessages[i];
-    for (uint8_t k = 0; k < m.num_signals; ++k) {
-      const SignalDef& s = m.signals[k];
-      EXPECT_EQ(s.raw_min, std::llround((s.min - s.offset) / s.factor)) << m.name << '.' << s.name;
-      EXPECT_EQ(s.raw_max, std::llround((s.max - s.offset) / s.factor)) << m.name << '.' << s.name;
+    const MessageLayout* l = find_layout(m.id);
+    ASSERT_NE(l, nullptr) << m.name;
+    EXPECT_EQ(l, &layout_of(static_cast<MsgId>(m.id)));
+    EXPECT_EQ(l->data_id, m.data_id);
+    EXPECT_EQ(l->dlc, m.dlc);
+    ASSERT_EQ(l->num_payload + kFirstPayloadSignal, m.num_signals) << m.name;
+    for (uint8_t k = kFirstPayloadSignal; k < m.num_signals; ++k) {
+      const SignalDef& d = m.signals[k];
+      const SignalLayout& s = signal_layout(*l, k);
+      EXPECT_EQ(s.start_bit, d.start_bit) << m.name << '.' << d.name;
+      EXPECT_EQ(s.bit_len, d.bit_len) << m.name << '.' << d.name;
+      EXPECT_EQ(s.is_signed, d.is_signed) << m.name << '.' << d.name;
+      EXPECT_EQ(s.non_finite, d.non_finite) << m.name << '.' << d.name;
+      EXPECT_EQ(1.0 / s.inv_factor, d.factor) << m.name << '.' << d.name;
+      EXPECT_EQ(-static_cast<double>(s.raw_zero) / s.inv_factor, d.offset) << m.name << '.' << d.name;
+      const int64_t raw_min = std::llround((d.min - d.offset) / d.factor);
+      const int64_t raw_max = std::llround((d.max - d.offset) / d.factor);
+      bool flagged = false;
+      if (d.factor == 1.0 && d.offset == 0.0 && d.min == 0.0 && !d.is_signed) {
+        // Count signal: clips at the field maximum, which must be the table's max.
+        EXPECT_EQ(raw_from_count(s, ~uint64_t{0}, &flagged), raw_max) << m.name << '.' << d.name;
+        EXPECT_TRUE(flagged);
+        EXPECT_EQ(raw_min, 0);
+      } else {
+        EXPECT_EQ(s.raw_min, raw_min) << m.name << '.' << d.name;
+        EXPECT_EQ(s.raw_max, raw_max) << m.name << '.' << d.name;
+      }
     }
   }
+  EXPECT_EQ(find_layout(0x7FF), nullptr);
   for (const double v : {0.5, -0.5, 1.5, -1.5, 2.4999999999999996, 0.49999999999999994, -0.49999999999999994,
                          32767.0, -32768.0, 65535.5, 1e15 + 0.5}) {
     EXPECT_EQ(round_half_away(v), std::llround(v)) << v;

@@ -157,7 +157,10 @@ TEST(CanMessages, HeadingIsWrappedIntoPlusMinusPiWithoutSaturation) {
   VelHdgMsg d;
   ASSERT_EQ(decode(f, d), Status::kOk);
   EXPECT_NEAR(d.heading_rad, 3.5F - 2.0F * 3.14159265F, 1e-4F);
-  EXPECT_NEAR(wrap_pi(-7.0), -7.0 + 2.0 * 3.14159265358979, 1e-12);
+  VelHdgMsg neg{0.0F, 0.0F, -7.0F};
+  EXPECT_FALSE(encode(neg, 0, f));
+  ASSERT_EQ(decode(f, d), Status::kOk);
+  EXPECT_NEAR(d.heading_rad, -7.0F + 2.0F * 3.14159265F, 0.00005F + 1e-6F);
 }
 
 TEST(CanMessages, DecodeRejectsWrongIdLengthCrcAndCounterFifteen) {

@@ -1,0 +1,282 @@
+// The uwbnav CAN message set: ids, the one documented table of messages and
+// signals (names, units, comments, physical scaling in double) that
+// docs/uwbnav.dbc is generated from, and the DBC-side lookup. The firmware never
+// reads this table at run time: firmware/can/messages.cpp derives its compact
+// run-time layout from it at compile time, so the strings and doubles are only
+// emitted where the host (DBC generator, tests, tools) odr-uses them.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace uwbnav::can {
+
+// 11-bit identifiers (docs/can.md). Outputs 0x100..0x105, HIL inputs 0x0A0..0x0B1.
+enum class MsgId : uint16_t {
+  kNavTime = 0x100,      // output: time of the solution the 10 ms group belongs to
+  kPosXY = 0x101,        // output: horizontal position + status
+  kPosZ = 0x102,         // output: vertical position/velocity + status + range counts
+  kVelHdg = 0x103,       // output: horizontal velocity + heading
+  kAccuracy = 0x104,     // output: 1-sigma x/y/z + xy correlation
+  kDiag = 0x105,         // output: NLOS mask, overruns, input rejects, resets
+  kHilImuTime = 0x0A0,   // HIL input: IMU sample timestamp
+  kHilImuAccel = 0x0A1,  // HIL input: IMU specific force
+  kHilImuGyro = 0x0A2,   // HIL input: IMU angular rate
+  kHilUwbRange = 0x0B0,  // HIL input: UWB range, anchor, tag
+  kHilUwbTime = 0x0B1,   // HIL input: UWB range timestamp + channel powers
+};
+
+constexpr uint32_t id_of(MsgId m) { return static_cast<uint32_t>(m); }
+
+// What a signal encodes when its physical value is NaN/Inf.
+enum class NonFinite : uint8_t {
+  kZeroFlagged = 0,  // raw for physical 0 (clipped into range), Saturated flag set
+  kMaxFlagged,       // raw maximum (e.g. an unknown sigma is "worst"), Saturated flag set
+  kRawZeroNa,        // raw 0 is the "not available" code; no flag; decodes to NaN
+};
+
+struct ValueName {
+  int value;
+  const char* name;
+};
+
+// Round half away from zero (std::llround) in a constant expression: v minus
+// its truncation is exact in double for |v| < 2^52.
+constexpr int64_t round_half_away(double v) {
+  const auto t = static_cast<int64_t>(v);
+  const double frac = v - static_cast<double>(t);
+  return frac >= 0.5 ? t + 1 : (frac <= -0.5 ? t - 1 : t);
+}
+
+// One signal, Intel (little-endian) byte order: start_bit is the LSB position,
+// bit index = byte * 8 + bit-in-byte. physical = raw * factor + offset; raw =
+// round half away from zero of (physical - offset) / factor, clipped to the raw
+// values of min and max (docs/can.md). The run-time codec works from the
+// SignalLayout derived from this entry (firmware/can/messages.hpp).
+struct SignalDef {
+  const char* name;
+  uint8_t start_bit;
+  uint8_t bit_len;
+  bool is_signed;
+  double factor;
+  double offset;
+  double min;  // physical limits; encoding clips to them and sets the Saturated flag
+  double max;
+  const char* unit;
+  const char* comment;
+  NonFinite non_finite;
+  const ValueName* values;  // value table (DBC VAL_), nullptr when none
+  uint8_t num_values;
+};
+
+struct MessageDef {
+  uint32_t id;
+  const char* name;
+  uint8_t dlc;           // bytes
+  uint16_t data_id;      // E2E data ID (DBC attribute E2EDataID)
+  uint16_t cycle_ms;     // nominal cycle (DBC GenMsgCycleTime), 0 = event driven
+  bool from_uwbnav;      // transmitter: true = UWBNAV node, false = HIL_RIG
+  const char* comment;
+  const SignalDef* signals;
+  uint8_t num_signals;
+};
+
+// Every message starts with the same three header signals at these indices.
+constexpr uint8_t kSigCrc = 0;        // bits 0..7
+constexpr uint8_t kSigCounter = 1;    // bits 8..11
+constexpr uint8_t kSigSaturated = 2;  // bit 15
+constexpr uint8_t kFirstPayloadSignal = 3;  // first signal after the header
+constexpr uint8_t kMaxSignals = 8;
+
+// ---- The table (single source of truth; docs/can.md, docs/uwbnav.dbc) ---------
+
+namespace table {
+
+inline constexpr ValueName kStatusValues[] = {
+    {0, "initialising"}, {1, "valid"}, {2, "degraded"}, {3, "invalid"}};
+
+inline constexpr ValueName kPowerValues[] = {{0, "not_available"}};
+
+// Common E2E header of every frame: CRC (byte 0), alive counter (byte 1 bits
+// 0..3), Saturated flag (byte 1 bit 7). Bits 12..14 are message specific.
+#define UWBNAV_CAN_HEADER(P)                                                                            \
+  {P "_CRC", 0, 8, false, 1.0, 0.0, 0.0, 255.0, "", "CRC-8 SAE J1850 over E2EDataID (low byte, high byte) and bytes 1..7", \
+   NonFinite::kZeroFlagged, nullptr, 0},                                                                \
+  {P "_AliveCounter", 8, 4, false, 1.0, 0.0, 0.0, 14.0, "", "alive counter 0..14, +1 per transmission, 15 never sent", \
+   NonFinite::kZeroFlagged, nullptr, 0},                                                                \
+  {P "_Saturated", 15, 1, false, 1.0, 0.0, 0.0, 1.0, "",                                                \
+   "1 = a signal of this frame was clipped to its range or was not finite at the sender",               \
+   NonFinite::kZeroFlagged, nullptr, 0}
+
+inline constexpr SignalDef kNavTimeSignals[] = {
+    UWBNAV_CAN_HEADER("NavTime"),
+    {"NavTime_Us", 16, 48, false, 1.0, 0.0, 0.0, 281474976710655.0, "us",
+     "estimator time of the solution carried by the frames of this 10 ms group (same alive counter)",
+     NonFinite::kZeroFlagged, nullptr, 0},
+};
+
+inline constexpr SignalDef kPosXYSignals[] = {
+    UWBNAV_CAN_HEADER("PosXY"),
+    {"PosXY_Status", 12, 2, false, 1.0, 0.0, 0.0, 3.0, "", "navigation solution status",
+     NonFinite::kZeroFlagged, kStatusValues, 4},
+    {"PosX", 16, 24, true, 0.001, 0.0, -8388.608, 8388.607, "m", "body origin x in the anchor (navigation) frame",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"PosY", 40, 24, true, 0.001, 0.0, -8388.608, 8388.607, "m", "body origin y in the anchor (navigation) frame",
+     NonFinite::kZeroFlagged, nullptr, 0},
+};
+
+inline constexpr SignalDef kPosZSignals[] = {
+    UWBNAV_CAN_HEADER("PosZ"),
+    {"PosZ_Status", 12, 2, false, 1.0, 0.0, 0.0, 3.0, "", "navigation solution status",
+     NonFinite::kZeroFlagged, kStatusValues, 4},
+    {"PosZ", 16, 16, true, 0.001, 0.0, -32.768, 32.767, "m", "body origin z (up) in the anchor frame",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"VelZ", 32, 16, true, 0.01, 0.0, -327.68, 327.67, "m/s", "body origin velocity z (up), navigation frame",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"RangesUsed", 48, 8, false, 1.0, 0.0, 0.0, 255.0, "", "UWB ranges fused since the previous output",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"RangesRejected", 56, 8, false, 1.0, 0.0, 0.0, 255.0, "", "UWB ranges rejected since the previous output",
+     NonFinite::kZeroFlagged, nullptr, 0},
+};
+
+inline constexpr SignalDef kVelHdgSignals[] = {
+    UWBNAV_CAN_HEADER("VelHdg"),
+    {"VelX", 16, 16, true, 0.01, 0.0, -327.68, 327.67, "m/s", "body origin velocity x, navigation frame",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"VelY", 32, 16, true, 0.01, 0.0, -327.68, 327.67, "m/s", "body origin velocity y, navigation frame",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"Heading", 48, 16, true, 0.0001, 0.0, -3.1416, 3.1416, "rad",
+     "yaw of the body x axis from the navigation x axis, counter-clockwise positive",
+     NonFinite::kZeroFlagged, nullptr, 0},
+};
+
+inline constexpr SignalDef kAccuracySignals[] = {
+    UWBNAV_CAN_HEADER("Accuracy"),
+    {"SigmaX", 16, 12, false, 0.005, 0.0, 0.0, 20.475, "m", "claimed 1-sigma of PosX (unknown: maximum)",
+     NonFinite::kMaxFlagged, nullptr, 0},
+    {"SigmaY", 28, 12, false, 0.005, 0.0, 0.0, 20.475, "m", "claimed 1-sigma of PosY (unknown: maximum)",
+     NonFinite::kMaxFlagged, nullptr, 0},
+    {"SigmaZ", 40, 12, false, 0.005, 0.0, 0.0, 20.475, "m", "claimed 1-sigma of PosZ (unknown: maximum)",
+     NonFinite::kMaxFlagged, nullptr, 0},
+    {"CorrXY", 52, 12, true, 0.001, 0.0, -1.0, 1.0, "", "correlation coefficient of the x and y position errors",
+     NonFinite::kZeroFlagged, nullptr, 0},
+};
+
+inline constexpr SignalDef kDiagSignals[] = {
+    UWBNAV_CAN_HEADER("Diag"),
+    {"Diag_Resets", 12, 3, false, 1.0, 0.0, 0.0, 7.0, "", "filter resets since start (saturates at 7)",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"NlosMask", 16, 16, false, 1.0, 0.0, 0.0, 65535.0, "",
+     "bit i = 1: the last range from anchor table index i was judged NLOS",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"LoopOverruns", 32, 16, false, 1.0, 0.0, 0.0, 65535.0, "", "10 ms cycles that overran since start (saturates)",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"InputRejects", 48, 16, false, 1.0, 0.0, 0.0, 65535.0, "",
+     "sensor frames rejected by input validation since start (saturates)", NonFinite::kZeroFlagged, nullptr, 0},
+};
+
+inline constexpr SignalDef kHilImuTimeSignals[] = {
+    UWBNAV_CAN_HEADER("ImuTime"),
+    {"ImuTime_Us", 16, 32, false, 1.0, 0.0, 0.0, 4294967295.0, "us",
+     "sensor timestamp of the IMU sample, low 32 bits of the receiver time base (wraps every 71.6 min)",
+     NonFinite::kZeroFlagged, nullptr, 0},
+};
+
+inline constexpr SignalDef kHilImuAccelSignals[] = {
+    UWBNAV_CAN_HEADER("ImuAccel"),
+    {"AccelX", 16, 16, true, 0.005, 0.0, -163.84, 163.835, "m/s^2", "specific force x, body frame FLU",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"AccelY", 32, 16, true, 0.005, 0.0, -163.84, 163.835, "m/s^2", "specific force y, body frame FLU",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"AccelZ", 48, 16, true, 0.005, 0.0, -163.84, 163.835, "m/s^2", "specific force z, body frame FLU (+9.81 level at rest)",
+     NonFinite::kZeroFlagged, nullptr, 0},
+};
+
+inline constexpr SignalDef kHilImuGyroSignals[] = {
+    UWBNAV_CAN_HEADER("ImuGyro"),
+    {"GyroX", 16, 16, true, 0.001, 0.0, -32.768, 32.767, "rad/s", "angular rate x, body frame FLU",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"GyroY", 32, 16, true, 0.001, 0.0, -32.768, 32.767, "rad/s", "angular rate y, body frame FLU",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"GyroZ", 48, 16, true, 0.001, 0.0, -32.768, 32.767, "rad/s", "angular rate z, body frame FLU",
+     NonFinite::kZeroFlagged, nullptr, 0},
+};
+
+inline constexpr SignalDef kHilUwbRangeSignals[] = {
+    UWBNAV_CAN_HEADER("UwbRange"),
+    {"AnchorId", 16, 16, false, 1.0, 0.0, 0.0, 65535.0, "", "anchor id as surveyed (anchors.csv)",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"TagId", 32, 8, false, 1.0, 0.0, 0.0, 255.0, "", "tag id on the vehicle (tags.csv)",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"Range", 40, 24, true, 0.001, 0.0, -8388.608, 8388.607, "m", "two-way range, antenna to antenna (radios may report small negative values)",
+     NonFinite::kZeroFlagged, nullptr, 0},
+};
+
+inline constexpr SignalDef kHilUwbTimeSignals[] = {
+    UWBNAV_CAN_HEADER("UwbTime"),
+    {"UwbTime_Us", 16, 32, false, 1.0, 0.0, 0.0, 4294967295.0, "us",
+     "sensor timestamp of the range, low 32 bits of the receiver time base (wraps every 71.6 min)",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"FpPower", 48, 8, false, 0.5, -128.0, -127.5, -0.5, "dBm", "first-path power, raw 0 = not available",
+     NonFinite::kRawZeroNa, kPowerValues, 1},
+    {"RxPower", 56, 8, false, 0.5, -128.0, -127.5, -0.5, "dBm", "total received power, raw 0 = not available",
+     NonFinite::kRawZeroNa, kPowerValues, 1},
+};
+
+#undef UWBNAV_CAN_HEADER
+
+template <size_t N>
+constexpr uint8_t count_of(const SignalDef (&)[N]) {
+  static_assert(N <= kMaxSignals, "raise kMaxSignals");
+  return static_cast<uint8_t>(N);
+}
+
+// Data IDs: 0x1000 | CAN id (unique per message, fixed for the life of the layout).
+constexpr uint16_t data_id_for(MsgId id) { return static_cast<uint16_t>(0x1000U | id_of(id)); }
+
+}  // namespace table
+
+inline constexpr MessageDef kMessages[] = {
+    {id_of(MsgId::kNavTime), "UWBNAV_NavTime", 8, table::data_id_for(MsgId::kNavTime), 10, true,
+     "Opens each 10 ms output group: the estimator time of the solution. PosXY, PosZ, VelHdg sent in the same cycle carry the same alive counter.",
+     table::kNavTimeSignals, table::count_of(table::kNavTimeSignals)},
+    {id_of(MsgId::kPosXY), "UWBNAV_PosXY", 8, table::data_id_for(MsgId::kPosXY), 10, true,
+     "Horizontal position of the body origin in the anchor frame, 1 mm, and the solution status.",
+     table::kPosXYSignals, table::count_of(table::kPosXYSignals)},
+    {id_of(MsgId::kPosZ), "UWBNAV_PosZ", 8, table::data_id_for(MsgId::kPosZ), 10, true,
+     "Vertical position and velocity, solution status, UWB ranges fused and rejected since the previous output.",
+     table::kPosZSignals, table::count_of(table::kPosZSignals)},
+    {id_of(MsgId::kVelHdg), "UWBNAV_VelHdg", 8, table::data_id_for(MsgId::kVelHdg), 10, true,
+     "Horizontal velocity in the navigation frame and heading.", table::kVelHdgSignals, table::count_of(table::kVelHdgSignals)},
+    {id_of(MsgId::kAccuracy), "UWBNAV_Accuracy", 8, table::data_id_for(MsgId::kAccuracy), 20, true,
+     "Claimed 1-sigma position accuracy and x/y correlation (cycle: parameter can.accuracy_period_ms, default 20 ms).",
+     table::kAccuracySignals, table::count_of(table::kAccuracySignals)},
+    {id_of(MsgId::kDiag), "UWBNAV_Diag", 8, table::data_id_for(MsgId::kDiag), 100, true,
+     "Diagnostics: per-anchor NLOS decisions, loop overruns, input rejects, filter resets.",
+     table::kDiagSignals, table::count_of(table::kDiagSignals)},
+    {id_of(MsgId::kHilImuTime), "HIL_ImuTime", 8, table::data_id_for(MsgId::kHilImuTime), 10, false,
+     "HIL input, IMU sample part 1 of 3 (time). The three parts of one sample carry the same alive counter.",
+     table::kHilImuTimeSignals, table::count_of(table::kHilImuTimeSignals)},
+    {id_of(MsgId::kHilImuAccel), "HIL_ImuAccel", 8, table::data_id_for(MsgId::kHilImuAccel), 10, false,
+     "HIL input, IMU sample part 2 of 3 (specific force).", table::kHilImuAccelSignals, table::count_of(table::kHilImuAccelSignals)},
+    {id_of(MsgId::kHilImuGyro), "HIL_ImuGyro", 8, table::data_id_for(MsgId::kHilImuGyro), 10, false,
+     "HIL input, IMU sample part 3 of 3 (angular rate).", table::kHilImuGyroSignals, table::count_of(table::kHilImuGyroSignals)},
+    {id_of(MsgId::kHilUwbRange), "HIL_UwbRange", 8, table::data_id_for(MsgId::kHilUwbRange), 0, false,
+     "HIL input, UWB range part 1 of 2 (anchor, tag, range). Both parts carry the same alive counter.",
+     table::kHilUwbRangeSignals, table::count_of(table::kHilUwbRangeSignals)},
+    {id_of(MsgId::kHilUwbTime), "HIL_UwbTime", 8, table::data_id_for(MsgId::kHilUwbTime), 0, false,
+     "HIL input, UWB range part 2 of 2 (time, channel powers).", table::kHilUwbTimeSignals, table::count_of(table::kHilUwbTimeSignals)},
+};
+
+inline constexpr size_t kNumMessages = sizeof(kMessages) / sizeof(kMessages[0]);
+
+// Entry of kMessages for a CAN id, nullptr when none. Host/DBC side and
+// constant expressions only: the firmware looks frames up with find_layout().
+constexpr const MessageDef* find_message(uint32_t id) {
+  for (const MessageDef& m : kMessages) {
+    if (m.id == id) return &m;
+  }
+  return nullptr;
+}
+
+}  // namespace uwbnav::can
