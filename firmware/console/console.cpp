@@ -9,12 +9,14 @@
 
 #include "estimator/params.hpp"
 #include "firmware/app.hpp"
+#include "firmware/text_format.hpp"
 
 namespace uwbnav {
 namespace {
 
 constexpr size_t kMarkerMax = 40;      // "[dropped N bytes]\r\n" [bytes]
 constexpr size_t kMaxJobLinesPerPoll = 16;
+constexpr size_t kLineCap = Console::kOutLineMax - 2;  // reply text without CR LF [bytes]
 
 }  // namespace
 
@@ -228,14 +230,15 @@ void Console::run_streams() {
         const AppStats& s = app_.stats();
         const hal::CanCounters& c = app_.board().can.counters();
         begin_async("$stats");
-        add(" t_us=%llu imu_rx=%lu imu_ok=%lu uwb_rx=%lu uwb_ok=%lu uwb_rej=%lu cycles=%llu overruns=%llu"
-            " cycle_max_us=%lu can_tx_ok=%lu can_tx_dropped=%lu dropped_bytes=%llu",
-            static_cast<unsigned long long>(now_us_), static_cast<unsigned long>(s.imu.received),
+        add_u64(" t_us=", now_us_);
+        add(" imu_rx=%lu imu_ok=%lu uwb_rx=%lu uwb_ok=%lu uwb_rej=%lu", static_cast<unsigned long>(s.imu.received),
             static_cast<unsigned long>(s.imu.accepted), static_cast<unsigned long>(s.uwb.received),
-            static_cast<unsigned long>(s.uwb.accepted), static_cast<unsigned long>(s.uwb.rejected_total()),
-            static_cast<unsigned long long>(s.loop.cycles), static_cast<unsigned long long>(s.loop.overruns),
-            static_cast<unsigned long>(s.loop.cycle_max_us), static_cast<unsigned long>(c.tx_ok),
-            static_cast<unsigned long>(c.tx_dropped), static_cast<unsigned long long>(stats_.dropped_bytes));
+            static_cast<unsigned long>(s.uwb.accepted), static_cast<unsigned long>(s.uwb.rejected_total()));
+        add_u64(" cycles=", s.loop.cycles);
+        add_u64(" overruns=", s.loop.overruns);
+        add(" cycle_max_us=%lu can_tx_ok=%lu can_tx_dropped=%lu", static_cast<unsigned long>(s.loop.cycle_max_us),
+            static_cast<unsigned long>(c.tx_ok), static_cast<unsigned long>(c.tx_dropped));
+        add_u64(" dropped_bytes=", stats_.dropped_bytes);
         end_async();
         break;
       }
@@ -272,14 +275,43 @@ void Console::begin(const char* tag) {
 }
 
 void Console::add(const char* fmt, ...) {
-  const size_t cap = kOutLineMax - 2;  // room for CR LF
-  if (out_len_ + 1 >= cap) return;
+  if (out_len_ + 1 >= kLineCap) return;
   va_list ap;
   va_start(ap, fmt);
-  const int w = std::vsnprintf(out_ + out_len_, cap - out_len_, fmt, ap);
+  const int w = std::vsnprintf(out_ + out_len_, kLineCap - out_len_, fmt, ap);
   va_end(ap);
   if (w < 0) return;
-  out_len_ = out_len_ + static_cast<size_t>(w) < cap ? out_len_ + static_cast<size_t>(w) : cap - 1;
+  advance(static_cast<size_t>(w));
+}
+
+// Accounts for `written` characters stored snprintf-style at out_ + out_len_
+// (a longer text was cut at the end of the line).
+void Console::advance(size_t written) {
+  out_len_ = out_len_ + written < kLineCap ? out_len_ + written : kLineCap - 1;
+}
+
+void Console::add_u64(const char* key, uint64_t v) {
+  add("%s", key);
+  if (out_len_ + 1 >= kLineCap) return;
+  advance(format_u64(out_ + out_len_, kLineCap - out_len_, v));
+}
+
+void Console::add_fixed(const char* key, const float* v, size_t n, int decimals) {
+  add("%s", key);
+  for (size_t i = 0; i < n; ++i) {
+    if (i > 0) add(",");
+    if (out_len_ + 1 >= kLineCap) return;
+    advance(format_fixed(out_ + out_len_, kLineCap - out_len_, v[i], decimals));
+  }
+}
+
+void Console::add_general(const char* key, const float* v, size_t n, int precision) {
+  add("%s", key);
+  for (size_t i = 0; i < n; ++i) {
+    if (i > 0) add(",");
+    if (out_len_ + 1 >= kLineCap) return;
+    advance(format_general(out_ + out_len_, kLineCap - out_len_, v[i], precision));
+  }
 }
 
 void Console::end_line(size_t reserve) {
@@ -289,29 +321,38 @@ void Console::end_line(size_t reserve) {
   out_len_ = 0;
 }
 
-void Console::error(const char* fmt, ...) {
+void Console::begin_error() {
   ++stats_.errors;
   out_len_ = 0;
   add("error: ");
-  const size_t cap = kOutLineMax - 2;
+}
+
+void Console::error(const char* fmt, ...) {
+  begin_error();
   va_list ap;
   va_start(ap, fmt);
-  const int w = std::vsnprintf(out_ + out_len_, cap - out_len_, fmt, ap);
+  const int w = std::vsnprintf(out_ + out_len_, kLineCap - out_len_, fmt, ap);
   va_end(ap);
-  if (w > 0) out_len_ = out_len_ + static_cast<size_t>(w) < cap ? out_len_ + static_cast<size_t>(w) : cap - 1;
+  if (w > 0) advance(static_cast<size_t>(w));
   end_line(0);
 }
 
 // Queues a whole line (preceded by the drop marker when output was lost), or
 // drops it and counts it. `reserve` bytes must stay free afterwards.
 bool Console::queue(const char* text, size_t len, size_t reserve) {
+  static constexpr char kMarkerHead[] = "[dropped ";
+  static constexpr char kMarkerTail[] = " bytes]\r\n";
   char marker[kMarkerMax];
   size_t marker_len = 0;
   if (pending_drop_bytes_ > 0) {
-    const int w = std::snprintf(marker, sizeof marker, "[dropped %llu bytes]\r\n",
-                                static_cast<unsigned long long>(pending_drop_bytes_));
-    marker_len = w > 0 ? static_cast<size_t>(w) : 0;
+    std::memcpy(marker, kMarkerHead, sizeof kMarkerHead - 1);
+    marker_len = sizeof kMarkerHead - 1;
+    marker_len += format_u64(marker + marker_len, kU64TextMax, pending_drop_bytes_);
+    std::memcpy(marker + marker_len, kMarkerTail, sizeof kMarkerTail - 1);
+    marker_len += sizeof kMarkerTail - 1;
   }
+  static_assert(sizeof kMarkerHead - 1 + kU64TextMax - 1 + sizeof kMarkerTail - 1 <= kMarkerMax,
+                "the drop marker holds any count");
   if (tx_.free() < marker_len + len + reserve) {
     pending_drop_bytes_ += len;
     stats_.dropped_bytes += len;

@@ -21,6 +21,7 @@
 namespace uwbnav {
 
 class App;
+struct ParamDef;
 
 // Console counters (`stats`, flood test). Monotonic until `reset stats`.
 struct ConsoleStats {
@@ -52,6 +53,7 @@ class Console final : public LogSink {
   static constexpr size_t kReplyReserve = 512;     // TX room kept free of streams/logs for replies [bytes]
   static constexpr size_t kMaxArgs = 8;            // words per command line
   static constexpr uint32_t kMaxStreamRateHz = 100;
+  static constexpr int kGeneralPrecision = 6;      // significant digits of parameter values ("%g")
 
   // Registers itself as the logger's sink. The App must outlive the console.
   explicit Console(App& app);
@@ -115,11 +117,22 @@ class Console final : public LogSink {
   void flush();
 
   // Output. Every line is queued whole with CR LF, or dropped whole.
+  // add() takes strings and integers up to 32 bits only: floats and 64-bit
+  // counts go through the add_* fields below (firmware/text_format.hpp), as the
+  // board's printf has neither.
   void begin(const char* tag);
   void add(const char* fmt, ...) __attribute__((format(printf, 2, 3)));
+  void add_u64(const char* key, uint64_t v);
+  // `key` then n floats, comma-separated, as "%.<decimals>f" / "%.<precision>g".
+  void add_fixed(const char* key, const float* v, size_t n, int decimals);
+  void add_fixed(const char* key, float v, int decimals) { add_fixed(key, &v, 1, decimals); }
+  void add_general(const char* key, const float* v, size_t n, int precision);
+  void add_general(const char* key, float v) { add_general(key, &v, 1, kGeneralPrecision); }
+  void advance(size_t written);
   void end_line(size_t reserve);
   void reply_end() { end_line(0); }
   void error(const char* fmt, ...) __attribute__((format(printf, 2, 3)));
+  void begin_error();
   bool queue(const char* text, size_t len, size_t reserve);
   void queue_raw(const char* text, size_t len);
   void prompt();
@@ -149,7 +162,9 @@ class Console final : public LogSink {
   bool step_stats(size_t step);
   bool step_history(size_t step);
   void add_param(size_t index, bool with_doc);
+  void add_param_change(const ParamDef& p, float old);
   void add_pos_fields();
+  void add_anchor_fields(const AnchorStatus& a);
   void stream_anchor_lines();
 
   App& app_;

@@ -8,6 +8,7 @@
 #include "estimator/params.hpp"
 #include "firmware/app.hpp"
 #include "firmware/console/console.hpp"
+#include "firmware/text_format.hpp"
 
 #ifndef UWBNAV_VERSION
 #define UWBNAV_VERSION "unknown"
@@ -19,11 +20,9 @@
 namespace uwbnav {
 namespace {
 
-constexpr double kRadToDeg = 57.29577951308232;
+constexpr float kRadToDeg = 57.2957795F;
 
-double d(float f) { return static_cast<double>(f); }
 unsigned long ul(uint32_t v) { return static_cast<unsigned long>(v); }
-unsigned long long ull(uint64_t v) { return static_cast<unsigned long long>(v); }
 
 const char* can_state_name(hal::CanBusState s) {
   switch (s) {
@@ -59,15 +58,6 @@ uint32_t params_table_crc32() {
     crc = crc_float(crc, p.max);
   }
   return crc;
-}
-
-// Strict float parse: the whole word must be a finite number.
-bool parse_float(const char* text, float* out) {
-  char* endp = nullptr;
-  const float v = std::strtof(text, &endp);
-  if (endp == text || *endp != '\0' || !std::isfinite(v)) return false;
-  *out = v;
-  return true;
 }
 
 bool parse_rate(const char* text, uint32_t* out) {
@@ -148,11 +138,21 @@ void Console::cmd_version(size_t argc, char**) {
 void Console::add_pos_fields() {
   const NavOutput& o = app_.last_output();
   const float speed_mps = std::sqrt(o.vel_nav_mps.x * o.vel_nav_mps.x + o.vel_nav_mps.y * o.vel_nav_mps.y);
-  add(" t_us=%llu mode=%s x_m=%.3f y_m=%.3f z_m=%.3f sx_m=%.3f sy_m=%.3f sz_m=%.3f speed_mps=%.2f"
-      " heading_deg=%.1f used=%u rejected=%u",
-      ull(o.t_us), nav_status_name(o.status), d(o.pos_nav_m.x), d(o.pos_nav_m.y), d(o.pos_nav_m.z),
-      d(o.pos_sigma_m.x), d(o.pos_sigma_m.y), d(o.pos_sigma_m.z), d(speed_mps),
-      d(o.heading_rad) * kRadToDeg, static_cast<unsigned>(o.ranges_used), static_cast<unsigned>(o.ranges_rejected));
+  // In float (no soft double on the board): the 0.1 deg text can differ from
+  // that of the double product when both lie within 1e-5 deg of a rounding
+  // boundary (1 line in 160,000 of a replayed drive).
+  const float heading_deg = o.heading_rad * kRadToDeg;
+  add_u64(" t_us=", o.t_us);
+  add(" mode=%s", nav_status_name(o.status));
+  add_fixed(" x_m=", o.pos_nav_m.x, 3);
+  add_fixed(" y_m=", o.pos_nav_m.y, 3);
+  add_fixed(" z_m=", o.pos_nav_m.z, 3);
+  add_fixed(" sx_m=", o.pos_sigma_m.x, 3);
+  add_fixed(" sy_m=", o.pos_sigma_m.y, 3);
+  add_fixed(" sz_m=", o.pos_sigma_m.z, 3);
+  add_fixed(" speed_mps=", speed_mps, 2);
+  add_fixed(" heading_deg=", heading_deg, 1);
+  add(" used=%u rejected=%u", static_cast<unsigned>(o.ranges_used), static_cast<unsigned>(o.ranges_rejected));
 }
 
 void Console::cmd_status(size_t argc, char**) {
@@ -167,12 +167,12 @@ void Console::cmd_status(size_t argc, char**) {
   if (dg.last_imu_t_us == 0 || dg.last_imu_t_us > now) {
     add(" imu_age_ms=none");
   } else {
-    add(" imu_age_ms=%llu", ull((now - dg.last_imu_t_us) / 1000U));
+    add_u64(" imu_age_ms=", (now - dg.last_imu_t_us) / 1000U);
   }
   if (dg.last_range_used_t_us == 0 || dg.last_range_used_t_us > now) {
     add(" uwb_age_ms=none");
   } else {
-    add(" uwb_age_ms=%llu", ull((now - dg.last_range_used_t_us) / 1000U));
+    add_u64(" uwb_age_ms=", (now - dg.last_range_used_t_us) / 1000U);
   }
   add(" used_total=%lu resets=%lu", ul(dg.ranges_used), ul(dg.resets));
   reply_end();
@@ -192,9 +192,10 @@ bool Console::step_stats(size_t step) {
     case 0: {
       const LoopStats& l = s.loop;
       begin("stats loop");
-      add(" cycles=%llu overruns=%llu cycle_min_us=%lu cycle_avg_us=%lu cycle_max_us=%lu jitter_max_us=%lu",
-          ull(l.cycles), ull(l.overruns), ul(l.cycle_min_us), ul(l.avg_us()), ul(l.cycle_max_us),
-          ul(l.jitter_max_us));
+      add_u64(" cycles=", l.cycles);
+      add_u64(" overruns=", l.overruns);
+      add(" cycle_min_us=%lu cycle_avg_us=%lu cycle_max_us=%lu jitter_max_us=%lu", ul(l.cycle_min_us), ul(l.avg_us()),
+          ul(l.cycle_max_us), ul(l.jitter_max_us));
       break;
     }
     case 1:
@@ -228,10 +229,12 @@ bool Console::step_stats(size_t step) {
     default: {
       const LogCounters& lc = logger().counters();
       begin("stats console");
-      add(" rx_bytes=%llu tx_bytes=%llu dropped_bytes=%llu lines=%lu commands=%lu errors=%lu overlong=%lu"
-          " garbage=%lu max_rx_per_tick=%lu max_tx_per_tick=%lu log_emitted=%lu log_suppressed=%lu",
-          ull(stats_.rx_bytes), ull(stats_.tx_bytes), ull(stats_.dropped_bytes), ul(stats_.lines),
-          ul(stats_.commands), ul(stats_.errors), ul(stats_.overlong_lines), ul(stats_.garbage_lines),
+      add_u64(" rx_bytes=", stats_.rx_bytes);
+      add_u64(" tx_bytes=", stats_.tx_bytes);
+      add_u64(" dropped_bytes=", stats_.dropped_bytes);
+      add(" lines=%lu commands=%lu errors=%lu overlong=%lu garbage=%lu max_rx_per_tick=%lu max_tx_per_tick=%lu"
+          " log_emitted=%lu log_suppressed=%lu",
+          ul(stats_.lines), ul(stats_.commands), ul(stats_.errors), ul(stats_.overlong_lines), ul(stats_.garbage_lines),
           ul(stats_.max_rx_per_poll), ul(stats_.max_tx_per_poll), ul(lc.emitted), ul(lc.suppressed));
       reply_end();
       return false;
@@ -260,16 +263,23 @@ bool Console::step_anchors(size_t step) {
   const AnchorStatus& a = snap_.anchors[step - 1];
   const uint64_t now = snap_.t_us;
   begin("anchors");
-  add(" id=%u state=%s range_m=%.3f innov_m=%.3f p_nlos=%.3f los=%lu nlos=%lu used=%lu",
-      static_cast<unsigned>(a.anchor_id), a.nlos_state ? "nlos" : "los", d(a.last_range_m),
-      d(a.last_innovation_m), d(a.last_p_nlos), ul(a.los_count), ul(a.nlos_count), ul(a.used_count));
+  add_anchor_fields(a);
   if (a.last_t_us == 0 || a.last_t_us > now) {
     add(" age_ms=none");
   } else {
-    add(" age_ms=%llu", ull((now - a.last_t_us) / 1000U));
+    add_u64(" age_ms=", (now - a.last_t_us) / 1000U);
   }
   reply_end();
   return step < n;
+}
+
+// "id state range_m innov_m p_nlos los nlos used" of `anchors` and `$anchor`.
+void Console::add_anchor_fields(const AnchorStatus& a) {
+  add(" id=%u state=%s", static_cast<unsigned>(a.anchor_id), a.nlos_state ? "nlos" : "los");
+  add_fixed(" range_m=", a.last_range_m, 3);
+  add_fixed(" innov_m=", a.last_innovation_m, 3);
+  add_fixed(" p_nlos=", a.last_p_nlos, 3);
+  add(" los=%lu nlos=%lu used=%lu", ul(a.los_count), ul(a.nlos_count), ul(a.used_count));
 }
 
 void Console::stream_anchor_lines() {
@@ -277,9 +287,8 @@ void Console::stream_anchor_lines() {
   for (size_t i = 0; i < nav.num_anchors(); ++i) {
     const AnchorStatus& a = nav.anchor_status(i);
     begin_async("$anchor");
-    add(" t_us=%llu id=%u state=%s range_m=%.3f innov_m=%.3f p_nlos=%.3f los=%lu nlos=%lu used=%lu", ull(now_us_),
-        static_cast<unsigned>(a.anchor_id), a.nlos_state ? "nlos" : "los", d(a.last_range_m),
-        d(a.last_innovation_m), d(a.last_p_nlos), ul(a.los_count), ul(a.nlos_count), ul(a.used_count));
+    add_u64(" t_us=", now_us_);
+    add_anchor_fields(a);
     end_async();
   }
 }
@@ -298,10 +307,11 @@ bool Console::step_ekf(size_t step) {
   if (step == 0) {
     const float* x = snap_.state;
     begin("ekf state");
-    add(" p_m=%.3f,%.3f,%.3f v_mps=%.3f,%.3f,%.3f q=%.5f,%.5f,%.5f,%.5f ba_mps2=%.4f,%.4f,%.4f"
-        " bg_radps=%.5f,%.5f,%.5f",
-        d(x[0]), d(x[1]), d(x[2]), d(x[3]), d(x[4]), d(x[5]), d(x[6]), d(x[7]), d(x[8]), d(x[9]), d(x[10]),
-        d(x[11]), d(x[12]), d(x[13]), d(x[14]), d(x[15]));
+    add_fixed(" p_m=", x, 3, 3);
+    add_fixed(" v_mps=", x + 3, 3, 3);
+    add_fixed(" q=", x + 6, 4, 5);
+    add_fixed(" ba_mps2=", x + 10, 3, 4);
+    add_fixed(" bg_radps=", x + 13, 3, 5);
     reply_end();
     return true;
   }
@@ -309,26 +319,40 @@ bool Console::step_ekf(size_t step) {
     float p[kStates];
     for (size_t i = 0; i < kStates; ++i) p[i] = snap_.cov[i][i];
     begin("ekf pdiag");
-    add(" p_m2=%.3g,%.3g,%.3g v_m2ps2=%.3g,%.3g,%.3g att_rad2=%.3g,%.3g,%.3g ba_m2ps4=%.3g,%.3g,%.3g"
-        " bg_rad2ps2=%.3g,%.3g,%.3g",
-        d(p[0]), d(p[1]), d(p[2]), d(p[3]), d(p[4]), d(p[5]), d(p[6]), d(p[7]), d(p[8]), d(p[9]), d(p[10]),
-        d(p[11]), d(p[12]), d(p[13]), d(p[14]));
+    add_general(" p_m2=", p, 3, 3);
+    add_general(" v_m2ps2=", p + 3, 3, 3);
+    add_general(" att_rad2=", p + 6, 3, 3);
+    add_general(" ba_m2ps4=", p + 9, 3, 3);
+    add_general(" bg_rad2ps2=", p + 12, 3, 3);
     reply_end();
     return job_verbose_;
   }
   const size_t row = step - 2;
   begin("ekf cov");
-  add(" row=%lu v=", static_cast<unsigned long>(row));
-  for (size_t c = 0; c < kStates; ++c) add(c == 0 ? "%.3g" : ",%.3g", d(snap_.cov[row][c]));
+  add(" row=%lu", static_cast<unsigned long>(row));
+  add_general(" v=", snap_.cov[row], kStates, 3);
   reply_end();
   return row + 1 < kStates;
 }
 
 void Console::add_param(size_t index, bool with_doc) {
   const ParamDef& p = kParamDefs[index];
-  add(" name=%s value=%g default=%g min=%g max=%g unit=%s", p.name, d(app_.params().get(p.index)), d(p.def),
-      d(p.min), d(p.max), p.unit);
+  add(" name=%s", p.name);
+  add_general(" value=", app_.params().get(p.index));
+  add_general(" default=", p.def);
+  add_general(" min=", p.min);
+  add_general(" max=", p.max);
+  add(" unit=%s", p.unit);
   if (with_doc) add(" doc=\"%s\"", p.doc);
+}
+
+// Reply of param set / param reset NAME: "param name=.. value=.. old=..".
+void Console::add_param_change(const ParamDef& p, float old) {
+  begin("param");
+  add(" name=%s", p.name);
+  add_general(" value=", app_.params().get(p.index));
+  add_general(" old=", old);
+  reply_end();
 }
 
 bool Console::step_param_list(size_t step) {
@@ -367,13 +391,20 @@ void Console::cmd_param(size_t argc, char** argv) {
       error("param: unknown parameter '%s' (see param list)", argv[2]);
       return;
     }
-    float v = 0.0F;
-    if (!parse_float(argv[3], &v)) {
+    const Result<float> parsed = parse_decimal_float(argv[3]);
+    if (!parsed.ok()) {
       error("param: '%s' is not a finite number; %s unchanged", argv[3], p->name);
       return;
     }
+    const float v = parsed.value();
     if (v < p->min || v > p->max) {
-      error("param: %s=%g out of range [%g, %g]; unchanged", p->name, d(v), d(p->min), d(p->max));
+      begin_error();
+      add("param: %s", p->name);
+      add_general("=", v);
+      add_general(" out of range [", p->min);
+      add_general(", ", p->max);
+      add("]; unchanged");
+      reply_end();
       return;
     }
     const float old = app_.params().get(p->index);
@@ -382,10 +413,12 @@ void Console::cmd_param(size_t argc, char** argv) {
       error("param: set %s failed (%s); unchanged", p->name, status_name(s));
       return;
     }
-    UWBNAV_LOG_INFO("console", "param %s %g -> %g", p->name, d(old), d(v));
-    begin("param");
-    add(" name=%s value=%g old=%g", p->name, d(app_.params().get(p->index)), d(old));
-    reply_end();
+    char old_text[kGeneralTextMax];
+    char new_text[kGeneralTextMax];
+    (void)format_general(old_text, sizeof old_text, old, kGeneralPrecision);
+    (void)format_general(new_text, sizeof new_text, v, kGeneralPrecision);
+    UWBNAV_LOG_INFO("console", "param %s %s -> %s", p->name, old_text, new_text);
+    add_param_change(*p, old);
     return;
   }
   if (argc == 2 && (std::strcmp(sub, "save") == 0 || std::strcmp(sub, "load") == 0)) {
@@ -416,9 +449,7 @@ void Console::cmd_param(size_t argc, char** argv) {
     }
     const float old = app_.params().get(p->index);
     ignore_status(app_.set_param(p->index, p->def));  // the default is inside [min, max] (static_assert)
-    begin("param");
-    add(" name=%s value=%g old=%g", p->name, d(app_.params().get(p->index)), d(old));
-    reply_end();
+    add_param_change(*p, old);
     return;
   }
   error("param: usage: param list|get NAME|set NAME VALUE|save|load|reset [NAME]");
@@ -440,8 +471,9 @@ void Console::cmd_log(size_t argc, char** argv) {
   }
   const LogCounters& lc = logger().counters();
   begin("log");
-  add(" level=%s rate_per_s=%g emitted=%lu suppressed=%lu", log_level_name(logger().level()),
-      d(app_.params().get(ParamId::kConsoleLogRate)), ul(lc.emitted), ul(lc.suppressed));
+  add(" level=%s", log_level_name(logger().level()));
+  add_general(" rate_per_s=", app_.params().get(ParamId::kConsoleLogRate));
+  add(" emitted=%lu suppressed=%lu", ul(lc.emitted), ul(lc.suppressed));
   reply_end();
 }
 

@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <cstring>
 
+#include "firmware/text_format.hpp"
+
 namespace uwbnav {
 namespace {
 
@@ -54,8 +56,9 @@ void Logger::write(LogSite& site, LogLevel level, const char* module, const char
   }
   ++site.in_window;
 
-  size_t n = append(line_, sizeof line_, 0, "log t_us=%llu level=%s mod=%s msg=",
-                    static_cast<unsigned long long>(now_us_), log_level_name(level), module);
+  char t_us[kU64TextMax];
+  (void)format_u64(t_us, sizeof t_us, now_us_);
+  size_t n = append(line_, sizeof line_, 0, "log t_us=%s level=%s mod=%s msg=", t_us, log_level_name(level), module);
   if (n + 1 < sizeof line_) {
     va_list ap;
     va_start(ap, fmt);

@@ -2,6 +2,9 @@
 // rate-limited per call site, written as one console line each through a
 // LogSink (the console's TX ring on a board, a capture buffer in tests).
 // Static memory only; a message that does not fit the line is truncated.
+// Formats take strings and integers up to 32 bits: the board's printf is
+// integer-only, so floats and 64-bit values are passed as text made by
+// firmware/text_format.hpp ("%s").
 #pragma once
 
 #include <cstddef>

@@ -1,5 +1,5 @@
 // Line-buffered text output over semihosting without stdio: integers and
-// floats (exact fixed-point conversion, no double arithmetic, no printf).
+// floats as text of firmware/text_format.hpp (exact, no double, no printf).
 #pragma once
 
 #include <cstddef>
@@ -12,7 +12,8 @@ class TextOut {
   TextOut& str(const char* s);
   TextOut& u64(uint64_t v);
   TextOut& i64(int64_t v);
-  // `v` rounded to `decimals` (0..9) digits after the point; "nan"/"inf" when not finite.
+  // printf "%.<decimals>f" of v (decimals 0..9): exact value rounded to nearest,
+  // ties to even; "nan"/"inf" (with a sign when negative) when not finite.
   TextOut& fixed(float v, int decimals);
   // IEEE-754 bit pattern of `v` as 0x%08x (exact value for machine comparison).
   TextOut& bits(float v);
