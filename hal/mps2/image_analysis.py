@@ -494,8 +494,8 @@ def path_component(path):
                        ("libuwbnav_firmware", "firmware (firmware/)"),
                        ("hal/mps2", "MPS2 board and harness (hal/mps2/)"),
                        ("libm_", "picolibc libm"),
-                       ("tinystdio", "picolibc stdio (snprintf/strtof)"),
-                       ("libgcc", "libgcc (soft-double, 64-bit integer helpers)"),
+                       ("tinystdio", "picolibc stdio (integer-only snprintf)"),
+                       ("libgcc", "libgcc (64-bit integer and conversion helpers)"),
                        ("libstdc++", "libstdc++/libsupc++"),
                        ("libsupc++", "libstdc++/libsupc++")):
         if key in path:
