@@ -14,7 +14,6 @@
 #include <fstream>
 #include <limits>
 #include <random>
-#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -412,11 +411,46 @@ std::vector<std::string> string_literals(const std::string& src) {
 }
 
 // True when a printf format converts a float (%f %e %g %a) or a long long (%lld %llu %jd ...).
+// Walks the conversion specifications: flags, width, precision, length, conversion.
 bool converts_float_or_long_long(const std::string& format) {
-  static const std::regex kBad(
-      R"(%[-+ #0']*(\*|[0-9]+)?(\.(\*|[0-9]+))?((hh|h|l|ll|L|j|z|t|q)?[fFeEgGaA]|(ll|L|j|q)[diouxX]))");
-  const std::string text = std::regex_replace(format, std::regex("%%"), "");  // "%%" is a literal percent sign
-  return std::regex_search(text, kBad);
+  const auto is_digit = [](char c) { return c >= '0' && c <= '9'; };
+  size_t i = 0;
+  const size_t n = format.size();
+  while (i < n) {
+    if (format[i++] != '%') continue;
+    if (i < n && format[i] == '%') {  // "%%" is a literal percent sign
+      ++i;
+      continue;
+    }
+    while (i < n && std::string("-+ #0'").find(format[i]) != std::string::npos) ++i;
+    if (i < n && format[i] == '*') {
+      ++i;
+    } else {
+      while (i < n && is_digit(format[i])) ++i;
+    }
+    if (i < n && format[i] == '.') {
+      ++i;
+      if (i < n && format[i] == '*') {
+        ++i;
+      } else {
+        while (i < n && is_digit(format[i])) ++i;
+      }
+    }
+    std::string length;
+    for (const char* m : {"hh", "ll", "h", "l", "L", "j", "z", "t", "q"}) {
+      if (format.compare(i, std::strlen(m), m) == 0) {
+        length = m;
+        break;
+      }
+    }
+    i += length.size();
+    if (i >= n) break;
+    const char conv = format[i++];
+    if (std::string("fFeEgGaA").find(conv) != std::string::npos) return true;
+    const bool wide = length == "ll" || length == "L" || length == "j" || length == "q";
+    if (wide && std::string("diouxX").find(conv) != std::string::npos) return true;
+  }
+  return false;
 }
 
 TEST(FirmwareFormats, NoPrintfFormatInFirmwareOrMps2ConvertsFloatsOrLongLong) {
@@ -445,7 +479,7 @@ TEST(FirmwareFormats, TheScanFindsFloatAndLongLongConversionsInStringLiteralsOnl
   ASSERT_EQ(lits.size(), 2U);
   EXPECT_EQ(lits[0], "x=%.3f");
   EXPECT_EQ(lits[1], "%llu %s");
-  for (const char* bad : {"%f", "%.3f", "x=%-8.2e", "%g", "%.*g", "%lf", "%A", "%llu", "%lld", "%08llx", "%jd", "%Lf"}) {
+  for (const char* bad : {"%f", "%.3f", "x=%-8.2e", "%g", "%.*g", "%*.*f", "%%%f", "%lf", "%A", "%llu", "%lld", "%08llx", "%jd", "%Lf"}) {
     EXPECT_TRUE(converts_float_or_long_long(bad)) << bad;
   }
   for (const char* fine : {"%s", "%lu", "%-58s", "0x%08lx", "%u", "%d", "100%% done", "%%f", "%zu", "%c"}) {
