@@ -13,14 +13,6 @@
 namespace uwbnav {
 namespace {
 
-// Microseconds (float parameter) to integer microseconds, truncated, through
-// uint32_t: float -> uint64_t is a soft-double libgcc call on the Cortex-M4F.
-// The parameter table bounds these values far below 2^32 us; the clamp keeps
-// the conversion defined anyway.
-uint64_t us_param(float v) {
-  return v > 0.0F ? static_cast<uint64_t>(static_cast<uint32_t>(std::fmin(v, 4.0e9F))) : 0U;
-}
-
 Real seconds(int64_t dt_us) { return static_cast<Real>(dt_us) * Real(1e-6); }
 
 int64_t diff_us(uint64_t a, uint64_t b) { return static_cast<int64_t>(a) - static_cast<int64_t>(b); }
@@ -92,8 +84,8 @@ void Navigator::update_params(const Params& params) {
   c.accel_bias_init = static_cast<Real>(params[ParamId::kImuAccelBiasInit]);
   // The site's (meta.ini) ranging sigma wins over the parameter default.
   c.uwb_sigma_m = static_cast<Real>(site_.uwb_sigma_m > 0.0F ? site_.uwb_sigma_m : params[ParamId::kUwbSigma]);
-  c.imu_timeout_us = us_param(params[ParamId::kInImuTimeoutUs]);
-  c.uwb_timeout_us = us_param(params[ParamId::kInUwbTimeoutUs]);
+  c.imu_timeout_us = param_us(params[ParamId::kInImuTimeoutUs]);
+  c.uwb_timeout_us = param_us(params[ParamId::kInUwbTimeoutUs]);
   c.ground_constraints = params[ParamId::kEkfGroundConstraints] > 0.5F && site_.platform == Platform::kGround;
   c.nhc_sigma_lat = static_cast<Real>(params[ParamId::kEkfNhcSigmaLat]);
   c.nhc_sigma_vert = static_cast<Real>(params[ParamId::kEkfNhcSigmaVert]);
@@ -102,15 +94,15 @@ void Navigator::update_params(const Params& params) {
   c.height_mode = static_cast<int>(std::lround(params[ParamId::kEkfHeightMode]));
   c.height_sigma = static_cast<Real>(params[ParamId::kEkfHeightSigma]);
   c.origin_height = static_cast<Real>(params[ParamId::kEkfOriginHeight]);
-  c.constraint_period_us = us_param(1e6F / params[ParamId::kEkfConstraintRate]);
+  c.constraint_period_us = param_us(1e6F / params[ParamId::kEkfConstraintRate]);
   c.cv_accel_psd = static_cast<Real>(params[ParamId::kEkfCvAccelPsd]);
-  c.init_window_us = us_param(params[ParamId::kEkfInitWindow] * 1e6F);
+  c.init_window_us = param_us(params[ParamId::kEkfInitWindow] * 1e6F);
   c.init_heading_dist = static_cast<Real>(params[ParamId::kEkfInitHeadingDist]);
-  c.init_heading_timeout_us = us_param(params[ParamId::kEkfInitHeadingTimeout] * 1e6F);
+  c.init_heading_timeout_us = param_us(params[ParamId::kEkfInitHeadingTimeout] * 1e6F);
   c.planar_spread = static_cast<Real>(params[ParamId::kEkfPlanarSpread]);
   c.diverge_nis = static_cast<Real>(params[ParamId::kEkfDivergeNis]);
   c.diverge_fraction = static_cast<Real>(params[ParamId::kEkfDivergeFraction]);
-  c.diverge_window_us = us_param(params[ParamId::kEkfDivergeWindow] * 1e6F);
+  c.diverge_window_us = param_us(params[ParamId::kEkfDivergeWindow] * 1e6F);
   c.degraded_sigma = static_cast<Real>(params[ParamId::kEkfDegradedSigma]);
   c.init_speed = static_cast<Real>(params[ParamId::kEkfInitSpeed]);
   c.init_yaw_sigma = static_cast<Real>(params[ParamId::kEkfInitYawSigma]);

@@ -98,4 +98,14 @@ class Params {
   float values_[kNumParams];
 };
 
+// A parameter value in microseconds (float) as integer microseconds, truncated;
+// 0 for values <= 0 and NaN. Through uint32_t: float -> uint64_t is a libgcc call
+// that computes in soft double on the Cortex-M4F. The table bounds every such
+// value (seconds parameters times 1e6 included) far below 2^32 us (71 min); the
+// clamp keeps the conversion defined anyway.
+inline uint64_t param_us(float value_us) {
+  constexpr float kMaxUs = 4.0e9F;
+  return value_us > 0.0F ? static_cast<uint64_t>(static_cast<uint32_t>(std::fmin(value_us, kMaxUs))) : 0U;
+}
+
 }  // namespace uwbnav

@@ -34,8 +34,7 @@ void InputValidator::update_params(const Params& params) {
   max_gyro_radps_ = params[ParamId::kInImuMaxGyro];
   min_range_m_ = params[ParamId::kUwbMinRange];
   max_range_m_ = params[ParamId::kUwbMaxRange];
-  // Through uint32_t (the table bounds it to 5e6 us): float -> uint64_t is a soft-double call on the M4F.
-  stale_us_ = static_cast<uint32_t>(params[ParamId::kInStaleUs]);
+  stale_us_ = param_us(params[ParamId::kInStaleUs]);
   drop_repeated_ = params[ParamId::kInDropRepeated] > 0.5F;
 }
 

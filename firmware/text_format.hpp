@@ -42,10 +42,10 @@ size_t format_general(char* out, size_t cap, float v, int precision);
 // printf "%llu" of v.
 size_t format_u64(char* out, size_t cap, uint64_t v);
 
-// Strict decimal number: [+|-] digits [. digits] [(e|E) [+|-] digits], at least
-// one mantissa digit, nothing before or after (no spaces, hex, inf or nan).
+// Strict decimal number: [+|-] (digits [. [digits]] | . digits) [(e|E) [+|-] digits],
+// i.e. at least one mantissa digit, nothing before or after (no spaces, hex, inf or nan).
 // kInvalidArgument when malformed, kOutOfRange when the magnitude rounds above
-// FLT_MAX; values below the smallest subnormal become +-0 (as strtof).
+// FLT_MAX; values at or below half the smallest subnormal become +-0 (as strtof).
 // Rounding is to nearest, ties to even. A value d * 10^k with d of at most 19
 // digits and -18 <= k <= 18 (every plain console number) is converted exactly,
 // identical to glibc's strtof. Longer inputs or larger exponents go through a

@@ -44,8 +44,8 @@ float normal_lower_quantile(float p) {
 }
 
 // ln Gamma*(a), Gamma*(a) = Gamma(a) / (sqrt(2 pi) a^(a - 1/2) e^-a) (Stirling's
-// correction factor), a > 0. Stirling series for a >= 8 (next term 691/(360360
-// a^11) < 1e-12); below, the exact recursion ln Gamma*(b) = ln Gamma*(b + 1) +
+// correction factor), a > 0. Stirling series for a >= 8 (next term 1/(1188 a^9)
+// < 1e-11); below, the exact recursion ln Gamma*(b) = ln Gamma*(b + 1) +
 // (b + 1/2) ln(1 + 1/b) - 1, whose right-hand part is the positive series
 // sum_{j>=1} w^(2j) / (2j + 1), w = 1/(2b + 1) (ln(1 + 1/b) = 2 artanh w):
 // no cancellation, unlike ln Gamma(a) minus its Stirling approximation in float.

@@ -19,16 +19,6 @@ GatingPolicy policy_from_param(float value) {
   return static_cast<GatingPolicy>(v);
 }
 
-// A parameter in microseconds to integer microseconds, truncated. Through
-// uint32_t: float -> uint64_t is a libgcc call on the Cortex-M4F that computes
-// in soft double; the parameter table bounds every such value (seconds
-// parameters times 1e6 included) far below 2^32 us (71 min), and the clamp
-// keeps the conversion defined anyway.
-constexpr float kMaxUsParam = 4.0e9F;
-uint64_t us_from_param(float value) {
-  return value > 0.0F ? static_cast<uint64_t>(static_cast<uint32_t>(std::fmin(value, kMaxUsParam))) : 0U;
-}
-
 float distance_m(const Vec3f& a, const Vec3f& b) {
   const float dx = a.x - b.x;
   const float dy = a.y - b.y;
@@ -69,10 +59,10 @@ void GatingLayer::update_params(const Params& params) {
   innov_gate_sigma_ = params[ParamId::kGateInnovSigma];
   svm_model_ = static_cast<int>(std::lround(params[ParamId::kGateSvmModel]));
   svm_threshold_ = params[ParamId::kGateSvmThreshold];
-  max_dt_us_ = us_from_param(params[ParamId::kGateMaxDtUs]);
+  max_dt_us_ = param_us(params[ParamId::kGateMaxDtUs]);
   ds_nlos_ = params[ParamId::kGateDsNlos];
   ds_fuse_ = params[ParamId::kGateDsFuse];
-  epoch_us_ = us_from_param(params[ParamId::kGateEpochUs]);
+  epoch_us_ = param_us(params[ParamId::kGateEpochUs]);
   resid_th_ = params[ParamId::kGateResidTh];
   resid_beta_ = params[ParamId::kGateResidBeta];
   const float pfa = params[ParamId::kGateRaimPfa];
@@ -86,13 +76,13 @@ void GatingLayer::update_params(const Params& params) {
   chan_hi_db_ = params[ParamId::kGateChanHiDb];
   chan_p_max_ = params[ParamId::kGateChanPMax];
   hyst_n_ = static_cast<uint16_t>(std::lround(params[ParamId::kGateHystN]));
-  escape_us_ = us_from_param(params[ParamId::kGateEscapeS] * 1e6F);
+  escape_us_ = param_us(params[ParamId::kGateEscapeS] * 1e6F);
   escape_r_scale_ = params[ParamId::kGateEscapeRScale];
   default_nlos_ = params[ParamId::kGateDefaultNlos];
   innov_z0_ = params[ParamId::kGateInnovZ0];
   verify_frac_ = params[ParamId::kGateVerifyFrac];
   drift_frac_ = params[ParamId::kGateDriftFrac];
-  warmup_us_ = us_from_param(params[ParamId::kGateWarmupS] * 1e6F);
+  warmup_us_ = param_us(params[ParamId::kGateWarmupS] * 1e6F);
 }
 
 void GatingLayer::reset() {

@@ -10,8 +10,8 @@ namespace {
 
 // Rounds ms to whole 10 ms ticks (half away from zero) in float, no double:
 // the float quotient ms / 10 is correctly rounded and lands on a half tick only
-// when the exact quotient is one (neighbouring float ms values lie over 8 ulps
-// of ms / 10 apart), so the result is the rounding of the exact quotient, as before.
+// when the exact quotient is one (neighbouring float ms values lie at least
+// 0.8 ulp of ms / 10 apart, more than the 0.5 ulp of its rounding), so the result is the rounding of the exact quotient, as before.
 uint32_t period_us_from_ms(float ms) {
   const long ticks = std::lround(ms / 10.0F);
   return static_cast<uint32_t>(ticks < 1 ? 1 : ticks) * kCanTickUs;

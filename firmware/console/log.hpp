@@ -61,6 +61,7 @@ class Logger {
   void set_rate_per_s(uint32_t rate) { rate_per_s_ = rate == 0 ? 1 : rate; }
   // Loop time stamped on each line and used by the rate limit [us].
   void set_time_us(uint64_t t_us) { now_us_ = t_us; }
+  uint64_t time_us() const { return now_us_; }
 
   bool enabled(LogLevel level) const { return static_cast<uint8_t>(level) <= static_cast<uint8_t>(level_); }
   // Counts a message below the threshold (the macros call this instead of write()).

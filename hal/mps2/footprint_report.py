@@ -117,7 +117,7 @@ def main():
     L.append("Image: `hal/mps2` board port (`uwbnav_mps2.elf`, preset `cortex-m4f`: arm-none-eabi GCC,")
     L.append("`-mcpu=cortex-m4 -mfpu=fpv4-sp-d16 -mfloat-abi=hard`, picolibc, no exceptions, no RTTI;")
     cfg = read_cache(args.cache)
-    hot = ", ".join(f"`{f}`" for f in cfg.get("UWBNAV_MPS2_HOT_FILES", "").split(";") if f)
+    hot = ", ".join(f"`{f}`" for f in cfg.get("UWBNAV_MPS2_HOT_SOURCES", "").split(";") if f)
     L.append(f"`{cfg.get('UWBNAV_MPS2_HOT_OPT', '?')}` for {hot or 'no file'}, "
              f"`{cfg.get('UWBNAV_MPS2_ESTIMATOR_OPT', '?')}` for the rest of the estimator, "
              f"`{cfg.get('UWBNAV_MPS2_FIRMWARE_OPT', '?')}` for the")

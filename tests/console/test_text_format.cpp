@@ -235,12 +235,16 @@ TEST(TextFormat, LoggerStampsTimesBeyond32BitMicroseconds) {
     std::string line;
     void log_line(LogLevel, const char* text, size_t len) override { line.assign(text, len); }
   } sink;
-  LogSink* saved = logger().sink();
+  LogSink* saved_sink = logger().sink();
+  const LogLevel saved_level = logger().level();
+  const uint64_t saved_t_us = logger().time_us();
   logger().set_sink(&sink);
   logger().set_level(LogLevel::kInfo);
   logger().set_time_us(5000000000123ULL);  // 58 days
   UWBNAV_LOG_INFO("fmt", "x=%s", "1.5");
-  logger().set_sink(saved);
+  logger().set_sink(saved_sink);
+  logger().set_level(saved_level);
+  logger().set_time_us(saved_t_us);
   EXPECT_EQ(sink.line, "log t_us=5000000000123 level=info mod=fmt msg=x=1.5");
 }
 

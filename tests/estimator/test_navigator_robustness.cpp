@@ -95,5 +95,32 @@ TEST(NavigatorRobustness, UwbOutageSigmaCoversDriftWithVibratingImu) {
   }
 }
 
+// Microsecond parameters reach the filter as integers without a float -> uint64_t
+// conversion (soft double on the M4F): truncated, 0 for non-positive or NaN values,
+// clamped instead of undefined above the uint32_t range.
+TEST(ParamUs, ConvertsTruncatesAndClampsMicrosecondParameters) {
+  EXPECT_EQ(param_us(200000.0F), 200000U);
+  EXPECT_EQ(param_us(1.5F * 1e6F), 1500000U);
+  EXPECT_EQ(param_us(999.9F), 999U);
+  EXPECT_EQ(param_us(0.0F), 0U);
+  EXPECT_EQ(param_us(-3.0F), 0U);
+  EXPECT_EQ(param_us(std::nanf("")), 0U);
+  EXPECT_EQ(param_us(1e12F), 4000000000U);
+  EXPECT_EQ(param_us(INFINITY), 4000000000U);
+  size_t checked = 0;
+  for (size_t i = 0; i < kNumParams; ++i) {
+    const ParamDef& d = kParamDefs[i];
+    const std::string unit(d.unit);
+    if (unit == "us") {
+      EXPECT_EQ(param_us(d.max), static_cast<uint64_t>(d.max)) << d.name << ": maximum beyond the uint32_t path";
+      ++checked;
+    } else if (unit == "s") {
+      EXPECT_EQ(param_us(d.max * 1e6F), static_cast<uint64_t>(d.max * 1e6F)) << d.name << ": maximum beyond the uint32_t path";
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 5U);
+}
+
 }  // namespace
 }  // namespace uwbnav
