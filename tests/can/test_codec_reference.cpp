@@ -40,6 +40,7 @@
 
 #include "firmware/can/e2e.hpp"
 #include "firmware/can/messages.hpp"
+#include "tests/float_bits.hpp"
 
 namespace uwbnav::can {
 namespace {
@@ -136,18 +137,6 @@ Signal heading_signal() {
   return {};
 }
 
-uint32_t bits_of(float v) {
-  uint32_t b = 0;
-  std::memcpy(&b, &v, sizeof b);
-  return b;
-}
-
-float float_of(uint32_t b) {
-  float v = 0.0F;
-  std::memcpy(&v, &b, sizeof v);
-  return v;
-}
-
 // Physical values that probe one scaled signal: specials, limits and their
 // neighbours, every exactly representable +-0.5 raw tie in (and just outside)
 // range with its float neighbours, near-ties of random raw values, random
@@ -192,7 +181,7 @@ std::vector<float> probe_values(const Signal& s, std::mt19937& rng) {
   std::uniform_int_distribution<uint32_t> any;
   for (int i = 0; i < 100000; ++i) {
     v.push_back(wide(rng));
-    v.push_back(float_of(any(rng)));
+    v.push_back(test::float_from_bits(any(rng)));
   }
   return v;
 }
@@ -225,7 +214,7 @@ TEST(CanCodecReference, EveryScaledSignalEncodesBitIdenticalToTheDoubleFormula) 
       ++tested;
       if (raw_new != raw_ref || flag_new != flag_ref) {
         if (++mismatches <= 5) {
-          ADD_FAILURE() << s.name() << " phys " << p << " (0x" << std::hex << bits_of(p) << std::dec << "): raw "
+          ADD_FAILURE() << s.name() << " phys " << p << " (0x" << std::hex << test::float_bits(p) << std::dec << "): raw "
                         << raw_new << " flag " << flag_new << ", double formula " << raw_ref << " flag " << flag_ref;
         }
       }
@@ -269,14 +258,14 @@ TEST(CanCodecReference, HeadingEncodesBitIdenticalToTheDoubleWrap) {
     if (to_tie <= old_error && std::llabs(raw_new - raw_ref) == 1) {
       ++near_tie;
     } else if (++mismatches <= 5) {
-      ADD_FAILURE() << "heading " << a << " (0x" << std::hex << bits_of(a) << std::dec << "): raw " << raw_new
+      ADD_FAILURE() << "heading " << a << " (0x" << std::hex << test::float_bits(a) << std::dec << "): raw " << raw_new
                     << ", double wrap " << raw_ref;
     }
   };
   // Every float with pi < |a| <= 3 pi (all headings off by one turn), exhaustively.
-  for (uint32_t b = bits_of(3.14159274F); b <= bits_of(static_cast<float>(3.0 * kPi)); ++b) {
-    check(float_of(b));
-    check(-float_of(b));
+  for (uint32_t b = test::float_bits(3.14159274F); b <= test::float_bits(static_cast<float>(3.0 * kPi)); ++b) {
+    check(test::float_from_bits(b));
+    check(-test::float_from_bits(b));
   }
   // Every +-0.5 LSB tie inside [-pi, pi] (a = odd / 32) with its neighbours.
   for (int j = -101; j <= 101; j += 2) {
@@ -292,7 +281,7 @@ TEST(CanCodecReference, HeadingEncodesBitIdenticalToTheDoubleWrap) {
   for (int i = 0; i < 1000000; ++i) {
     check(in_range(rng));
     check(turns(rng));
-    check(float_of(any(rng)));
+    check(test::float_from_bits(any(rng)));
   }
   for (const float a : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
                         -std::numeric_limits<float>::infinity(), std::numeric_limits<float>::max(),
@@ -312,7 +301,7 @@ TEST(CanCodecReference, EveryRawValueDecodesToTheSameFloatAsTheDoubleFormula) {
     for (int64_t raw = lo; raw <= hi; ++raw) {
       const float got = phys_from_raw(*s.layout, raw);
       const auto want = static_cast<float>(ref_to_phys(*s.def, raw));
-      if (bits_of(got) != bits_of(want) && !(std::isnan(got) && std::isnan(want)) && ++mismatches <= 5) {
+      if (test::float_bits(got) != test::float_bits(want) && !(std::isnan(got) && std::isnan(want)) && ++mismatches <= 5) {
         ADD_FAILURE() << s.name() << " raw " << raw << ": " << got << " vs double formula " << want;
       }
     }
@@ -331,7 +320,7 @@ TEST(CanCodecReference, TypedFramesAreBitIdenticalToTheDoublePacker) {
   auto value = [&](double scale) {
     const uint32_t pick = any(rng) % 16;
     if (pick == 0) return kNan;
-    if (pick == 1) return float_of(any(rng));
+    if (pick == 1) return test::float_from_bits(any(rng));
     return unit(rng) * static_cast<float>(scale);
   };
   const uint64_t counts[] = {0, 1, 3, 4, 7, 8, 255, 256, 65535, 65536, 0xFFFFFFFFULL, 0x100000000ULL,

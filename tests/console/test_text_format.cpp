@@ -20,21 +20,10 @@
 
 #include "firmware/console/log.hpp"
 #include "firmware/text_format.hpp"
+#include "tests/float_bits.hpp"
 
 namespace uwbnav {
 namespace {
-
-float from_bits(uint32_t u) {
-  float f = 0.0F;
-  std::memcpy(&f, &u, sizeof f);
-  return f;
-}
-
-uint32_t to_bits(float f) {
-  uint32_t u = 0;
-  std::memcpy(&u, &f, sizeof u);
-  return u;
-}
 
 std::string fixed(float v, int decimals) {
   char buf[kFixedTextMax];
@@ -71,7 +60,7 @@ std::vector<float> random_floats(size_t per_kind, uint32_t seed) {
   std::uniform_real_distribution<float> log10_mag(-12.0F, 3.0F);
   std::vector<float> v;
   for (size_t i = 0; i < per_kind; ++i) {
-    v.push_back(from_bits(static_cast<uint32_t>(rng())));
+    v.push_back(test::float_from_bits(static_cast<uint32_t>(rng())));
     v.push_back(uniform(rng));
     v.push_back(std::pow(10.0F, log10_mag(rng)));
   }
@@ -143,7 +132,7 @@ TEST(TextFormat, NanAndInfinityAreSpelledAsPrintfDoes) {
   EXPECT_EQ(fixed(-nan, 3), "-nan");
   EXPECT_EQ(general(inf, 6), "inf");
   EXPECT_EQ(general(-nan, 3), "-nan");
-  EXPECT_EQ(fixed(from_bits(0x7F800001U), 1), "nan");  // signalling pattern
+  EXPECT_EQ(fixed(test::float_from_bits(0x7F800001U), 1), "nan");  // signalling pattern
 }
 
 TEST(TextFormat, GeneralPicksFixedOrExponentFormAndDropsTrailingZeros) {
@@ -173,7 +162,7 @@ TEST(TextFormat, FixedAgreesWithHostPrintfOnEveryBoundaryAndRandomFloat) {
   size_t compared = 0;
   for (const float v : values) {
     for (int d = 0; d <= kMaxFormatDecimals; ++d) {
-      ASSERT_EQ(fixed(v, d), host_fixed(v, d)) << "bits 0x" << std::hex << to_bits(v) << std::dec << " decimals " << d;
+      ASSERT_EQ(fixed(v, d), host_fixed(v, d)) << "bits 0x" << std::hex << test::float_bits(v) << std::dec << " decimals " << d;
       ++compared;
     }
   }
@@ -187,7 +176,7 @@ TEST(TextFormat, GeneralAgreesWithHostPrintfOnEveryBoundaryAndRandomFloat) {
   size_t compared = 0;
   for (const float v : values) {
     for (int p = 1; p <= kMaxFormatPrecision; ++p) {
-      ASSERT_EQ(general(v, p), host_general(v, p)) << "bits 0x" << std::hex << to_bits(v) << std::dec << " precision "
+      ASSERT_EQ(general(v, p), host_general(v, p)) << "bits 0x" << std::hex << test::float_bits(v) << std::dec << " precision "
                                                    << p;
       ++compared;
     }
@@ -258,7 +247,7 @@ float parsed(const char* text) {
 
 // Distance in ulps between two finite floats of the same sign.
 int64_t ulps(float a, float b) {
-  return std::llabs(static_cast<int64_t>(to_bits(a) & 0x7FFFFFFFU) - static_cast<int64_t>(to_bits(b) & 0x7FFFFFFFU));
+  return std::llabs(static_cast<int64_t>(test::float_bits(a) & 0x7FFFFFFFU) - static_cast<int64_t>(test::float_bits(b) & 0x7FFFFFFFU));
 }
 
 TEST(TextParse, AcceptsPlainDecimalForms) {
@@ -278,7 +267,7 @@ TEST(TextParse, AcceptsPlainDecimalForms) {
   EXPECT_EQ(parsed("1.17549435e-38"), FLT_MIN);
   EXPECT_EQ(parsed("1.4e-45"), FLT_TRUE_MIN);
   EXPECT_EQ(parsed("1e-46"), 0.0F);  // below half the smallest subnormal: zero, as strtof
-  EXPECT_EQ(to_bits(parsed("-0")), 0x80000000U);
+  EXPECT_EQ(test::float_bits(parsed("-0")), 0x80000000U);
   EXPECT_EQ(parsed("0e999999"), 0.0F);
   EXPECT_EQ(parsed("0.000000000000000000000000000000000000000000000000000001e54"), 1.0F);
   EXPECT_EQ(parsed("123456789012345678901234567890"), std::strtof("123456789012345678901234567890", nullptr));
@@ -297,7 +286,7 @@ TEST(TextParse, RejectsGarbageAndOverflow) {
 TEST(TextParse, ExactMidpointsBetweenFloatsRoundToEvenAsStrtof) {
   for (const char* tie : {"8388608.5", "8388609.5", "4194304.25", "4194304.75", "16777217", "16777219",
                           "167772190e-1", "33554434", "0.50000002980232238769531250", "1.5000000596046447753906250"}) {
-    EXPECT_EQ(to_bits(parsed(tie)), to_bits(std::strtof(tie, nullptr))) << tie;
+    EXPECT_EQ(test::float_bits(parsed(tie)), test::float_bits(std::strtof(tie, nullptr))) << tie;
   }
   // Random midpoints m * 2^e (m odd, 25 bits) written out exactly in at most 19 digits.
   std::mt19937 rng(31337);
@@ -306,7 +295,7 @@ TEST(TextParse, ExactMidpointsBetweenFloatsRoundToEvenAsStrtof) {
     const int e = static_cast<int>(rng() % 54) - 16;  // m * 2^e < 10^19
     char text[64];
     std::snprintf(text, sizeof text, "%.*f", e < 0 ? -e : 0, std::ldexp(m, e));
-    ASSERT_EQ(to_bits(parsed(text)), to_bits(std::strtof(text, nullptr))) << text;
+    ASSERT_EQ(test::float_bits(parsed(text)), test::float_bits(std::strtof(text, nullptr))) << text;
   }
 }
 
@@ -331,7 +320,7 @@ TEST(TextParse, ShortDecimalsEqualHostStrtofBitForBit) {
       continue;
     }
     ASSERT_TRUE(got.ok()) << s;
-    ASSERT_EQ(to_bits(got.value()), to_bits(want)) << s;
+    ASSERT_EQ(test::float_bits(got.value()), test::float_bits(want)) << s;
     ++compared;
   }
   std::printf("[ parse    ] identical to glibc strtof for %zu random short decimals\n", compared);
@@ -340,17 +329,17 @@ TEST(TextParse, ShortDecimalsEqualHostStrtofBitForBit) {
 TEST(TextParse, PrintedFloatsReadBackExactly) {
   std::mt19937 rng(17);
   for (int i = 0; i < 200000; ++i) {
-    const float v = from_bits(static_cast<uint32_t>(rng()));
+    const float v = test::float_from_bits(static_cast<uint32_t>(rng()));
     if (!std::isfinite(v)) continue;
     char text[32];
     std::snprintf(text, sizeof text, "%.9g", static_cast<double>(v));
-    ASSERT_EQ(to_bits(parsed(text)), to_bits(v)) << text;
+    ASSERT_EQ(test::float_bits(parsed(text)), test::float_bits(v)) << text;
   }
 }
 
 // Midpoint between the positive normal float with bits `u` and the next one, as a double (exact).
 double midpoint_above(uint32_t u) {
-  return (static_cast<double>(from_bits(u)) + static_cast<double>(from_bits(u + 1U))) / 2.0;
+  return (static_cast<double>(test::float_from_bits(u)) + static_cast<double>(test::float_from_bits(u + 1U))) / 2.0;
 }
 
 TEST(TextParse, LongDecimalsNearMidpointsMatchStrtofUnlessCloserThan2PowMinus58) {
@@ -362,7 +351,7 @@ TEST(TextParse, LongDecimalsNearMidpointsMatchStrtofUnlessCloserThan2PowMinus58)
     const double off = std::ldexp(mid, -50) * (rng() % 2 ? 1.0 : -1.0);
     char text[64];
     std::snprintf(text, sizeof text, "%.29e", mid + off);
-    ASSERT_EQ(to_bits(parsed(text)), to_bits(std::strtof(text, nullptr))) << text;
+    ASSERT_EQ(test::float_bits(parsed(text)), test::float_bits(std::strtof(text, nullptr))) << text;
   }
   // The midpoint itself in 17 to 40 digits (decimal rounding leaves it a hair
   // off, > 19 digits are held as 19): within 1 ulp, and counted.
