@@ -82,8 +82,7 @@ void Navigator::update_params(const Params& params) {
   c.imu.accel_bias_rw = static_cast<Real>(params[ParamId::kImuAccelBiasRw]);
   c.gyro_bias_init = static_cast<Real>(params[ParamId::kImuGyroBiasInit]);
   c.accel_bias_init = static_cast<Real>(params[ParamId::kImuAccelBiasInit]);
-  // The site's (meta.ini) ranging sigma wins over the parameter default.
-  c.uwb_sigma_m = static_cast<Real>(site_.uwb_sigma_m > 0.0F ? site_.uwb_sigma_m : params[ParamId::kUwbSigma]);
+  c.uwb_sigma_m = static_cast<Real>(params[ParamId::kUwbSigma]);
   c.imu_timeout_us = param_us(params[ParamId::kInImuTimeoutUs]);
   c.uwb_timeout_us = param_us(params[ParamId::kInUwbTimeoutUs]);
   c.ground_constraints = params[ParamId::kEkfGroundConstraints] > 0.5F && site_.platform == Platform::kGround;

@@ -12,17 +12,33 @@
 namespace uwbnav {
 
 enum class ParamId : uint16_t {
-#define X(e, id, name, unit, def, lo, hi, doc) e,
+#define X(e, id, name, unit, kind, def, lo, hi, doc) e,
 #include "estimator/params_table.inc"
 #undef X
   kCount
 };
+
+// What values a parameter takes: any real in [min, max], or whole numbers only
+// (counts and durations, booleans 0/1, enumerations). Fractions of the whole
+// kinds are refused by Params::set, so the CLI, the console and the blob loader agree.
+enum class ParamKind : uint8_t { kReal = 0, kInt = 1, kBool = 2, kEnum = 3 };
+
+constexpr const char* param_kind_name(ParamKind k) {
+  switch (k) {
+    case ParamKind::kReal: return "real";
+    case ParamKind::kInt: return "integer";
+    case ParamKind::kBool: return "bool";
+    case ParamKind::kEnum: return "enum";
+  }
+  return "unknown";
+}
 
 struct ParamDef {
   ParamId index;
   uint16_t stable_id;  // never reused; what the NV store keys on
   const char* name;    // dotted, lower case; what the console and files use
   const char* unit;
+  ParamKind kind;
   float def;
   float min;
   float max;
@@ -33,17 +49,27 @@ constexpr size_t kNumParams = static_cast<size_t>(ParamId::kCount);
 
 // inline: one copy in the image, not one per translation unit that reads it.
 inline constexpr ParamDef kParamDefs[kNumParams] = {
-#define X(e, id, name, unit, def, lo, hi, doc) {ParamId::e, id, name, unit, def, lo, hi, doc},
+#define X(e, id, name, unit, kind, def, lo, hi, doc) {ParamId::e, id, name, unit, ParamKind::kind, def, lo, hi, doc},
 #include "estimator/params_table.inc"
 #undef X
 };
 
 namespace detail {
+// Whole number test usable in constant expressions. Every finite float of
+// magnitude >= 2^24 is whole; below, the int32 round trip is exact.
+constexpr bool is_whole(float v) {
+  constexpr float k2p24 = 16777216.0F;
+  if (!(v == v)) return false;  // NaN
+  if (v >= k2p24 || v <= -k2p24) return v < 3.4e38F && v > -3.4e38F;
+  return static_cast<float>(static_cast<int32_t>(v)) == v;
+}
 constexpr bool params_consistent() {
   for (size_t i = 0; i < kNumParams; ++i) {
     const ParamDef& d = kParamDefs[i];
     if (static_cast<size_t>(d.index) != i) return false;
     if (!(d.min <= d.def && d.def <= d.max)) return false;
+    if (d.kind != ParamKind::kReal && !(is_whole(d.def) && is_whole(d.min) && is_whole(d.max))) return false;
+    if (d.kind == ParamKind::kBool && !(d.min == 0.0F && d.max == 1.0F)) return false;
     for (size_t j = i + 1; j < kNumParams; ++j) {
       if (kParamDefs[j].stable_id == d.stable_id) return false;
     }
@@ -51,7 +77,8 @@ constexpr bool params_consistent() {
   return true;
 }
 }  // namespace detail
-static_assert(detail::params_consistent(), "parameter table: default outside [min,max] or duplicate stable id");
+static_assert(detail::params_consistent(),
+              "parameter table: default outside [min,max], duplicate stable id, or a whole-number kind with fractional bounds");
 
 // Current parameter values. Plain array of floats; writes are bounds-checked.
 class Params {
@@ -66,6 +93,7 @@ class Params {
     if (i >= kNumParams) return Status::kNotFound;
     if (!std::isfinite(value)) return Status::kNotFinite;
     if (value < kParamDefs[i].min || value > kParamDefs[i].max) return Status::kOutOfRange;
+    if (kParamDefs[i].kind != ParamKind::kReal && !detail::is_whole(value)) return Status::kInvalidArgument;
     values_[i] = value;
     return Status::kOk;
   }

@@ -73,7 +73,6 @@ struct SiteConfig {
   size_t num_tags = 0;
   Platform platform = Platform::kGround;
   float gravity_mps2 = 9.80665F;  // local gravity magnitude [m/s^2]
-  float uwb_sigma_m = 0.10F;      // nominal ranging 1-sigma [m] (meta.ini uwb_sigma_m)
   bool has_imu = true;            // false for UWB-only recordings
 
   // Returns index into anchors[] or -1 when unknown.

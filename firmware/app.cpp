@@ -9,7 +9,6 @@ App::App(hal::Board& board) : board_(board) {}
 
 Status App::init() {
   params_.reset_all();
-  if (board_.site.uwb_sigma_m > 0.0F) ignore_status(params_.set(ParamId::kUwbSigma, board_.site.uwb_sigma_m));
   ignore_status(load_params());  // empty or corrupt store: defaults stay
   validator_.configure(board_.site, params_);
   can_tx_.configure(params_);

@@ -19,7 +19,6 @@ Status load_site(const FlashRecording& rec, SiteConfig& site) {
   }
   if (rec.platform != kPlatformUnset) site.platform = static_cast<Platform>(rec.platform);
   if (!std::isnan(rec.gravity_mps2)) site.gravity_mps2 = rec.gravity_mps2;
-  if (!std::isnan(rec.uwb_sigma_m)) site.uwb_sigma_m = rec.uwb_sigma_m;
   site.has_imu = rec.num_imu > 0;
   return site.num_anchors > 0 && site.num_tags > 0 ? Status::kOk : Status::kInvalidArgument;
 }

@@ -48,7 +48,6 @@ struct FlashRecording {
   size_t num_tags;
   uint8_t platform;              // Platform value or kPlatformUnset
   float gravity_mps2;            // NaN: meta.ini has none (SiteConfig default)
-  float uwb_sigma_m;             // NaN: meta.ini has none (SiteConfig default)
   const FlashImu* imu;
   size_t num_imu;
   const FlashUwb* uwb;

@@ -146,7 +146,7 @@ def hexf(v):
 
 def load(rec_dir):
     meta = read_meta(os.path.join(rec_dir, "meta.ini"))
-    rec = {"name": os.path.basename(os.path.normpath(rec_dir)), "platform": None, "gravity": None, "sigma": None}
+    rec = {"name": os.path.basename(os.path.normpath(rec_dir)), "platform": None, "gravity": None}
     if "name" in meta and meta["name"][0]:
         rec["name"] = meta["name"][0]
     if "platform" in meta:
@@ -154,7 +154,8 @@ def load(rec_dir):
         if value not in ("ground", "air"):
             raise RecordingError(f"{where}: platform '{value}' is neither ground nor air")
         rec["platform"] = 0 if value == "ground" else 1
-    for key, field in (("gravity_mps2", "gravity"), ("uwb_sigma_m", "sigma")):
+    # uwb_sigma_m is a simulator fact (the true noise level): the firmware never reads it.
+    for key, field in (("gravity_mps2", "gravity"),):
         if key in meta:
             value, where = meta[key]
             v = parse_double(value, where)
@@ -235,7 +236,6 @@ def emit(rec, src_dir):
         out += ["};", ""]
     platform = "kPlatformUnset" if rec["platform"] is None else str(rec["platform"])
     gravity = "kNaNf" if rec["gravity"] is None else hexf(rec["gravity"])
-    sigma = "kNaNf" if rec["sigma"] is None else hexf(rec["sigma"])
     out += [
         "}  // namespace",
         "",
@@ -246,7 +246,6 @@ def emit(rec, src_dir):
         f"    kTags, {len(rec['tags'])},",
         f"    {platform},",
         f"    {gravity},",
-        f"    {sigma},",
         f"    {'kImu' if rec['imu'] else 'nullptr'}, {len(rec['imu'])},",
         f"    {'kUwb' if rec['uwb'] else 'nullptr'}, {len(rec['uwb'])},",
         "};",

@@ -355,7 +355,7 @@ TEST(DatasetReader, MetaIniFillsSiteAndWarnsAboutBadLines) {
   EXPECT_EQ(rec.name(), "drive 7");
   EXPECT_EQ(rec.site.platform, Platform::kAir);
   EXPECT_EQ(rec.site.gravity_mps2, 9.79F);
-  EXPECT_EQ(rec.site.uwb_sigma_m, 0.25F);
+  EXPECT_EQ(rec.meta["uwb_sigma_m"], "0.25") << "a simulator fact: kept in meta, never in the site config";
   EXPECT_EQ(rec.meta["description"], "a = b");
   EXPECT_TRUE(has_warning(rep, "meta.ini:7:", "key = value")) << dump(rep);
   EXPECT_EQ(rep.rows_skipped, 0U) << "meta.ini lines are not data rows";
@@ -365,7 +365,7 @@ TEST(DatasetReader, MetaIniFillsSiteAndWarnsAboutBadLines) {
   ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << rep.error;
   EXPECT_EQ(rec.site.platform, Platform::kGround);
   EXPECT_EQ(rec.site.gravity_mps2, SiteConfig{}.gravity_mps2);
-  EXPECT_EQ(rec.site.uwb_sigma_m, SiteConfig{}.uwb_sigma_m);
+  EXPECT_EQ(rec.meta.count("uwb_sigma_m"), 0U);
   EXPECT_TRUE(has_warning(rep, "meta.ini:1:", "platform")) << dump(rep);
   EXPECT_TRUE(has_warning(rep, "meta.ini:2:", "gravity_mps2")) << dump(rep);
   EXPECT_TRUE(has_warning(rep, "meta.ini:3:", "uwb_sigma_m")) << dump(rep);

@@ -35,7 +35,7 @@ Recording make_recording(std::mt19937& rng, size_t n_imu, size_t n_uwb) {
   rec.meta["imu_rate_hz"] = "100";
   rec.site.platform = Platform::kAir;
   rec.site.gravity_mps2 = 9.7803253F;
-  rec.site.uwb_sigma_m = 0.123456789F;
+  rec.meta["uwb_sigma_m"] = "0.123456789";
   for (uint16_t i = 0; i < 5; ++i) {
     EXPECT_EQ(rec.site.add_anchor(static_cast<uint16_t>(i * 1000U + 7U), Vec3f{uni(rng), uni(rng), uni(rng) / 7.0F}),
               Status::kOk);
@@ -97,7 +97,10 @@ void expect_same(const Recording& a, const Recording& b) {
   }
   EXPECT_EQ(a.site.platform, b.site.platform);
   EXPECT_TRUE(same_bits(a.site.gravity_mps2, b.site.gravity_mps2));
-  EXPECT_TRUE(same_bits(a.site.uwb_sigma_m, b.site.uwb_sigma_m));
+  EXPECT_EQ(a.meta.count("uwb_sigma_m"), b.meta.count("uwb_sigma_m"));
+  if (a.meta.count("uwb_sigma_m") != 0 && b.meta.count("uwb_sigma_m") != 0) {
+    EXPECT_EQ(a.meta.at("uwb_sigma_m"), b.meta.at("uwb_sigma_m"));
+  }
   EXPECT_EQ(a.site.has_imu, b.site.has_imu);
   ASSERT_EQ(a.imu.size(), b.imu.size());
   for (size_t i = 0; i < a.imu.size(); ++i) {

@@ -93,7 +93,6 @@ Status read_meta(const std::string& dir, Recording& out, ReadReport& report) {
                   "uwb_sigma_m " + csv::quote(value.data(), value.size()) + " is not in (0, 100]; ignored");
         continue;
       }
-      out.site.uwb_sigma_m = static_cast<float>(v);
     }
     out.meta[key] = value;
   }

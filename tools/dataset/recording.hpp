@@ -30,7 +30,9 @@ struct TruthRow {
 struct Recording {
   std::string dir;                          // where it was read from (may be empty)
   std::map<std::string, std::string> meta;  // meta.ini key = value
-  SiteConfig site;                          // anchors, tags, platform, gravity, uwb sigma, has_imu
+  SiteConfig site;                          // anchors, tags, platform, gravity, has_imu
+  // meta.ini keys as read. Simulator facts such as uwb_sigma_m (the true noise
+  // level) stay here, for evaluation only: nothing in this map reaches the firmware.
   std::vector<ImuSample> imu;               // empty for UWB-only recordings
   std::vector<UwbRow> uwb;
   std::vector<TruthRow> truth;              // empty when the recording has no truth

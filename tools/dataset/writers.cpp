@@ -67,13 +67,12 @@ Status write_meta(const std::string& path, const Recording& rec) {
   if (f == nullptr) return Status::kIoError;
   std::string text = "# format v1 recording (docs/dataset-format.md)\n";
   for (const auto& kv : rec.meta) {
-    if (kv.first == "platform" || kv.first == "gravity_mps2" || kv.first == "uwb_sigma_m") continue;
+    if (kv.first == "platform" || kv.first == "gravity_mps2") continue;
     text += meta_line(kv.first, kv.second);
   }
   // The site configuration is authoritative for the keys it carries.
   text += meta_line("platform", rec.site.platform == Platform::kAir ? "air" : "ground");
   text += meta_line("gravity_mps2", float_text(rec.site.gravity_mps2));
-  text += meta_line("uwb_sigma_m", float_text(rec.site.uwb_sigma_m));
   const bool good = std::fwrite(text.data(), 1, text.size(), f) == text.size();
   return finish(f, good);
 }

@@ -48,7 +48,7 @@ std::vector<dataset::EstimateRow> ls_baseline(const dataset::Recording& rec, LsM
   const uint8_t tag = rec.site.num_tags > 0 ? rec.site.tags[0].id : 0;
   const bool two_d = anchors_planar(rec.site);
   const float tag_z = rec.site.num_tags > 0 ? rec.site.tags[0].lever_body_m.z : 0.0F;
-  const float sigma = rec.site.uwb_sigma_m > 0.0F ? rec.site.uwb_sigma_m : 0.1F;
+  const float sigma = 0.1F;  // equal weights: the baseline knows no noise level
 
   uint64_t last_t[kMaxAnchors] = {};
   float last_r[kMaxAnchors] = {};

@@ -93,7 +93,6 @@ Status fill_site(const Scenario& sc, SiteConfig& site, std::string* error) {
   }
   site.platform = sc.platform == "air" ? Platform::kAir : Platform::kGround;
   site.gravity_mps2 = static_cast<float>(sc.gravity_mps2);
-  site.uwb_sigma_m = static_cast<float>(sc.uwb.sigma_m);
   site.has_imu = sc.imu.enabled;
   return Status::kOk;
 }
