@@ -458,6 +458,7 @@ NavOutput Navigator::output(uint64_t t_us) {
   out.vel_sigma_mps = Vec3f{static_cast<float>(std::sqrt(p(3, 3))), static_cast<float>(std::sqrt(p(4, 4))),
                             static_cast<float>(std::sqrt(p(5, 5)))};
   out.heading_rad = static_cast<float>(quat_yaw(x.q_nav_body));
+  out.mode = cv_mode_ ? NavMode::kUwbOnly : NavMode::kInertial;
 
   const uint64_t last_uwb_us =
       diag_.last_range_used_t_us > running_since_us_ ? diag_.last_range_used_t_us : running_since_us_;

@@ -120,10 +120,34 @@ constexpr const char* nav_status_name(NavStatus s) {
   return "unknown";
 }
 
+// Which solution the output carries (docs/ekf.md "Modes"). The status says how
+// far to trust it; the mode says where it comes from.
+enum class NavMode : uint8_t {
+  kNone = 0,        // no estimate yet: position unknown (NaN), status initialising
+  kInertial = 1,    // the IMU/UWB error-state EKF (nominal)
+  kUwbOnly = 2,     // ranges alone (constant-velocity model): no IMU on this vehicle or IMU lost
+  kAligning = 3,    // IMU present, heading not yet acquired: ranges-only solution meanwhile
+  kRecovering = 4,  // the IMU filter is being re-anchored after divergence: ranges-only solution meanwhile
+  kLsFix = 5,       // snapshot multilateration of the latest ranges (no filter yet)
+};
+
+constexpr const char* nav_mode_name(NavMode m) {
+  switch (m) {
+    case NavMode::kNone: return "none";
+    case NavMode::kInertial: return "inertial";
+    case NavMode::kUwbOnly: return "uwb-only";
+    case NavMode::kAligning: return "aligning";
+    case NavMode::kRecovering: return "recovering";
+    case NavMode::kLsFix: return "ls-fix";
+  }
+  return "unknown";
+}
+
 // Output of the estimator every 10 ms cycle (body origin, navigation frame).
 struct NavOutput {
   uint64_t t_us = 0;
   NavStatus status = NavStatus::kInitialising;
+  NavMode mode = NavMode::kNone;  // source of the solution
   Vec3f pos_nav_m;               // body origin position [m]
   Vec3f vel_nav_mps;             // body origin velocity [m/s]
   float q_nav_body[4] = {1.0F, 0.0F, 0.0F, 0.0F};  // Hamilton, scalar first, body->nav
