@@ -74,6 +74,13 @@ struct SiteConfig {
   Platform platform = Platform::kGround;
   float gravity_mps2 = 9.80665F;  // local gravity magnitude [m/s^2]
   bool has_imu = true;            // false for UWB-only recordings
+  // Commissioned ranging calibration (`uwbnav calibrate`, docs/commissioning.md):
+  // per anchor/tag pair (indices into anchors[] and tags[]) the offset of the
+  // radio's ranges, measured minus true [m], which the estimator subtracts, and
+  // the 1-sigma uncertainty of those offsets [m]. range_offset_sigma_m NaN: the
+  // site is uncalibrated (offsets all zero, the filter's own bias prior applies).
+  float range_offset_m[kMaxAnchors][kMaxTags] = {};
+  float range_offset_sigma_m = kNaNf;
 
   // Returns index into anchors[] or -1 when unknown.
   int find_anchor(uint16_t id) const {
