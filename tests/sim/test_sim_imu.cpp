@@ -2,6 +2,7 @@
 // noise statistics follow the configured figures.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -90,6 +91,28 @@ TEST(SimImu, NoiselessStrapdownReproducesTruthWithin1cmAfter60sParkingLot) {
 TEST(SimImu, NoiselessStrapdownReproducesTruthWithin1cmAfter60sIndoorWithClimbs) {
   const SimOutput out = run("indoor3d", true);
   EXPECT_LT(strapdown_error_after(out, 60.0), 0.01);
+}
+
+TEST(SimImu, NoiselessStrapdownReproducesTruthWithin1cmAfter60sMulticopter) {
+  // GIVEN the multicopter preset (take-off, figure-eight with tilt, waypoints, yaw turns)
+  const SimOutput out = run("drone_indoor", true);
+  // WHEN the IMU stream is integrated alone THEN it stays on the truth within 1 cm
+  EXPECT_LT(strapdown_error_after(out, 60.0), 0.01);
+}
+
+TEST(SimImu, MulticopterTiltsIntoItsAccelerationAndFeelsThrustOnlyAlongBodyZ) {
+  const SimOutput out = run("drone_indoor", true);
+  double max_tilt = 0.0;
+  for (const TruthState& t : out.truth) {
+    const Eigen::Quaterniond q(t.q_nav_body[0], t.q_nav_body[1], t.q_nav_body[2], t.q_nav_body[3]);
+    const Eigen::Vector3d a(t.acc_nav_mps2[0], t.acc_nav_mps2[1], t.acc_nav_mps2[2] + static_cast<double>(out.rec.site.gravity_mps2));
+    // Body z is the thrust direction: the specific force has no body x/y part.
+    EXPECT_LT(std::hypot(t.accel_body_mps2[0], t.accel_body_mps2[1]), 1e-9);
+    EXPECT_LT((q * Eigen::Vector3d::UnitZ() - a.normalized()).norm(), 1e-8);
+    max_tilt = std::max(max_tilt, std::acos(std::min(1.0, (q * Eigen::Vector3d::UnitZ()).z())));
+  }
+  EXPECT_GT(max_tilt, 2.0 * 3.14159265358979 / 180.0);
+  EXPECT_LT(max_tilt, 35.0 * 3.14159265358979 / 180.0);
 }
 
 TEST(SimImu, TruthVelocityIsTheDerivativeOfTruthPosition) {

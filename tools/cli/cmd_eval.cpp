@@ -1,7 +1,8 @@
-// `uwbnav eval report|nlos ...` and `uwbnav train-svm ...`: evaluation and training front ends.
+// `uwbnav eval report|nlos|family ...` and `uwbnav train-svm ...`: evaluation and training front ends.
 #include <cstdio>
 #include <cstring>
 
+#include "tools/eval/eval_family.hpp"
 #include "tools/eval/eval_nlos.hpp"
 #include "tools/eval/report.hpp"
 #include "tools/eval/svm_train.hpp"
@@ -11,9 +12,12 @@ namespace uwbnav::cli {
 int cmd_eval(int argc, char** argv) {
   if (argc >= 2 && std::strcmp(argv[1], "report") == 0) return eval::run_eval_report(argc - 1, argv + 1);
   if (argc >= 2 && std::strcmp(argv[1], "nlos") == 0) return eval::run_eval_nlos(argc - 1, argv + 1);
+  if (argc >= 2 && std::strcmp(argv[1], "family") == 0) return eval::run_eval_family(argc - 1, argv + 1);
   std::fprintf(stderr,
                "usage: uwbnav eval report RECORDING... --out DIR [--jobs N] [--no-figures]\n"
-               "       uwbnav eval nlos [options]   (seed 000 Table 2 form; see docs/nlos.md)\n");
+               "       uwbnav eval nlos [options]   (seed 000 Table 2 form; see docs/nlos.md)\n"
+               "       uwbnav eval family [--cells a,b] [--seeds tuning|reporting|N-M] [--fast] [--markdown] ...\n"
+               "                          (scenario family, accuracy with honesty; see docs/evaluation.md)\n");
   return 2;
 }
 

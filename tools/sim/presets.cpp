@@ -182,6 +182,67 @@ maneuver = turn 90 2
 )";
 }
 
+std::string drone_indoor() {
+  // Indoor multicopter like the MILUV set-up: 10x8 m hall, 6 anchors at
+  // 0.4-2.9 m, 25 Hz per anchor, take-off with an arbitrary heading, climb,
+  // figure-eight, waypoints with hover phases and yaw turns, landing.
+  return R"(
+[scenario]
+name = drone_indoor
+description = indoor multicopter: 10x8 m hall, 6 anchors at 0.4-2.9 m, 25 Hz per anchor, take-off, figure-eight, waypoints, hover, yaw turns, landing; consumer IMU with rotor vibration; no body blocking
+duration_s = 120
+platform = air
+gravity_mps2 = 9.80665
+
+[site]
+anchor = 1 0.3 0.3 0.4
+anchor = 2 9.7 0.2 2.9
+anchor = 3 9.8 7.7 0.5
+anchor = 4 0.2 7.8 2.7
+anchor = 5 5.0 0.1 1.6
+anchor = 6 5.1 7.9 2.2
+tag = 0 0.1 0 0.05
+
+[imu]
+rate_hz = 200
+grade = consumer
+vibration_accel_mps2 = 0.3
+vibration_gyro_dps = 0.5
+vibration_hz = 30
+vibration_bandwidth_hz = 6
+
+[uwb]
+schedule = per_anchor
+rate_hz = 25
+packet_loss = 0.02
+
+[nlos]
+body_block = 0
+outlier_prob = 0.005
+
+[route]
+kind = multicopter
+start = 3 3 0.1 37
+maneuver = hold 10
+maneuver = goto 3 3 1.5 5
+maneuver = hold 3
+maneuver = eight 2 1.5 20 2 30
+maneuver = goto 6.5 5 2 6
+maneuver = hold 4
+maneuver = goto 7 2.5 1.2 5
+maneuver = hold 2
+maneuver = goto 4 4 1.8 6
+maneuver = eight 1.5 1 -30 1 15
+maneuver = goto 3 3 1.5 5
+maneuver = goto 3 3 0.1 5
+maneuver = hold 100
+yaw = 0 20
+yaw = 90 6
+yaw = 0 25
+yaw = -180 10
+)";
+}
+
 std::string drive_1h() {
   return std::string(kParkingSite) + kParkingObstacles + R"(
 [scenario]
@@ -196,7 +257,7 @@ packet_loss = 0.02
 }  // namespace
 
 std::vector<std::string> preset_names() {
-  return {"parking_nlos", "parking_los", "seed000_protocol", "parking_outages", "indoor3d", "drive_1h"};
+  return {"parking_nlos", "parking_los", "seed000_protocol", "parking_outages", "indoor3d", "drive_1h", "drone_indoor"};
 }
 
 std::string preset_text(const std::string& name) {
@@ -206,6 +267,7 @@ std::string preset_text(const std::string& name) {
   if (name == "parking_outages") return parking_outages();
   if (name == "indoor3d") return indoor3d();
   if (name == "drive_1h") return drive_1h();
+  if (name == "drone_indoor") return drone_indoor();
   return std::string();
 }
 

@@ -91,6 +91,23 @@ Setter flag(Get get) {
   };
 }
 
+// Setter for an enum field from a fixed list of names.
+template <typename Get, typename E>
+Setter choice(Get get, std::vector<std::pair<std::string, E>> names) {
+  return [get, names](Scenario& s, const std::string& v, std::string* why) {
+    std::string list;
+    for (const auto& n : names) {
+      if (n.first == v) {
+        get(s) = n.second;
+        return true;
+      }
+      list += (list.empty() ? "" : ", ") + n.first;
+    }
+    *why = "expected one of " + list + ", got '" + v + "'";
+    return false;
+  };
+}
+
 bool parse_id(const std::string& w, unsigned long max, unsigned long& out, std::string* why) {
   double x = 0.0;
   if (!parse_double(w, x) || x < 0.0 || x > static_cast<double>(max) || std::floor(x) != x) {
@@ -167,7 +184,21 @@ const std::map<std::string, Setter>& setters() {
       s.tags.push_back(t);
       return true;
     };
+    m["site.survey_sigma_m"] = real([](Scenario& s) -> double& { return s.site.survey_sigma_m; }, 0, 10);
     // [imu]
+    m["imu.grade"] = [](Scenario& s, const std::string& v, std::string* why) {
+      if (apply_imu_grade(v, s.imu)) return true;
+      std::string list;
+      for (const std::string& g : imu_grade_names()) list += (list.empty() ? "" : ", ") + g;
+      *why = "unknown IMU grade '" + v + "' (" + list + ")";
+      return false;
+    };
+    m["imu.vibration_accel_mps2"] =
+        real([](Scenario& s) -> double& { return s.imu.vibration_accel_mps2; }, 0, 100);
+    m["imu.vibration_gyro_dps"] = real([](Scenario& s) -> double& { return s.imu.vibration_gyro_dps; }, 0, 100);
+    m["imu.vibration_hz"] = real([](Scenario& s) -> double& { return s.imu.vibration_hz; }, 0, 5000);
+    m["imu.vibration_bandwidth_hz"] =
+        real([](Scenario& s) -> double& { return s.imu.vibration_bandwidth_hz; }, 0.1, 1000);
     m["imu.enabled"] = flag([](Scenario& s) -> bool& { return s.imu.enabled; });
     m["imu.rate_hz"] = real([](Scenario& s) -> double& { return s.imu.rate_hz; }, 1.0, 10000.0);
     m["imu.gyro_bias_sigma_dps"] = real([](Scenario& s) -> double& { return s.imu.gyro_bias_sigma_dps; }, 0, 100);
@@ -200,7 +231,98 @@ const std::map<std::string, Setter>& setters() {
       s.uwb.outages.push_back(Outage{x[0], x[1]});
       return true;
     };
+    m["uwb.schedule"] = choice([](Scenario& s) -> UwbSchedule& { return s.uwb.schedule; },
+                               std::vector<std::pair<std::string, UwbSchedule>>{
+                                   {"round_robin", UwbSchedule::kRoundRobin},
+                                   {"per_anchor", UwbSchedule::kPerAnchor},
+                                   {"frame", UwbSchedule::kFrame}});
+    m["uwb.range_lsb_m"] = real([](Scenario& s) -> double& { return s.uwb.range_lsb_m; }, 0, 1);
+    m["uwb.anchor_offset_sigma_m"] = real([](Scenario& s) -> double& { return s.uwb.anchor_offset_sigma_m; }, 0, 10);
+    m["uwb.tag_offset_sigma_m"] = real([](Scenario& s) -> double& { return s.uwb.tag_offset_sigma_m; }, 0, 10);
+    m["uwb.pair_offset_sigma_m"] = real([](Scenario& s) -> double& { return s.uwb.pair_offset_sigma_m; }, 0, 10);
+    m["uwb.anchor_offset"] = [](Scenario& s, const std::string& v, std::string* why) {
+      const std::vector<std::string> w = split_ws(v);
+      RangeOffset o;
+      unsigned long id = 0;
+      if (w.size() != 2) {
+        *why = "anchor_offset needs 'ANCHOR_ID METRES'";
+        return false;
+      }
+      if (!parse_id(w[0], 65535, id, why)) return false;
+      if (!parse_double(w[1], o.offset_m) || std::fabs(o.offset_m) > 100.0) {
+        *why = "offset must be a number in [-100, 100] m";
+        return false;
+      }
+      o.anchor_id = static_cast<uint16_t>(id);
+      s.uwb.anchor_offsets.push_back(o);
+      return true;
+    };
+    m["uwb.tag_offset"] = [](Scenario& s, const std::string& v, std::string* why) {
+      const std::vector<std::string> w = split_ws(v);
+      RangeOffset o;
+      unsigned long id = 0;
+      if (w.size() != 2) {
+        *why = "tag_offset needs 'TAG_ID METRES'";
+        return false;
+      }
+      if (!parse_id(w[0], 255, id, why)) return false;
+      if (!parse_double(w[1], o.offset_m) || std::fabs(o.offset_m) > 100.0) {
+        *why = "offset must be a number in [-100, 100] m";
+        return false;
+      }
+      o.tag_id = static_cast<uint8_t>(id);
+      s.uwb.tag_offsets.push_back(o);
+      return true;
+    };
+    m["uwb.pair_offset"] = [](Scenario& s, const std::string& v, std::string* why) {
+      const std::vector<std::string> w = split_ws(v);
+      RangeOffset o;
+      unsigned long aid = 0;
+      unsigned long tid = 0;
+      if (w.size() != 3) {
+        *why = "pair_offset needs 'ANCHOR_ID TAG_ID METRES'";
+        return false;
+      }
+      if (!parse_id(w[0], 65535, aid, why) || !parse_id(w[1], 255, tid, why)) return false;
+      if (!parse_double(w[2], o.offset_m) || std::fabs(o.offset_m) > 100.0) {
+        *why = "offset must be a number in [-100, 100] m";
+        return false;
+      }
+      o.anchor_id = static_cast<uint16_t>(aid);
+      o.tag_id = static_cast<uint8_t>(tid);
+      s.uwb.pair_offsets.push_back(o);
+      return true;
+    };
+    m["uwb.scale_common_pct"] = real([](Scenario& s) -> double& { return s.uwb.scale_common_pct; }, -10, 10);
+    m["uwb.scale_pair_sigma_pct"] = real([](Scenario& s) -> double& { return s.uwb.scale_pair_sigma_pct; }, 0, 10);
+    m["uwb.burst_loss"] = real([](Scenario& s) -> double& { return s.uwb.burst_loss; }, 0, 0.95);
+    m["uwb.burst_mean_len"] = real([](Scenario& s) -> double& { return s.uwb.burst_mean_len; }, 1, 1e6);
+    m["uwb.block_anchors"] = [](Scenario& s, const std::string& v, std::string* why) {
+      unsigned long k = 0;
+      if (!parse_id(v, kMaxAnchors, k, why)) return false;
+      s.uwb.block_anchors = static_cast<size_t>(k);
+      return true;
+    };
+    m["uwb.block_min_s"] = real([](Scenario& s) -> double& { return s.uwb.block_min_s; }, 0.01, 1e6);
+    m["uwb.block_max_s"] = real([](Scenario& s) -> double& { return s.uwb.block_max_s; }, 0.01, 1e6);
+    m["uwb.block_gap_min_s"] = real([](Scenario& s) -> double& { return s.uwb.block_gap_min_s; }, 0, 1e6);
+    m["uwb.block_gap_max_s"] = real([](Scenario& s) -> double& { return s.uwb.block_gap_max_s; }, 0, 1e6);
     // [nlos]
+    m["nlos.episode_share"] = real([](Scenario& s) -> double& { return s.nlos.episode_share; }, 0, 0.95);
+    m["nlos.episode_mean_s"] = real([](Scenario& s) -> double& { return s.nlos.episode_mean_s; }, 0.01, 1e5);
+    m["nlos.episode_length_law"] =
+        choice([](Scenario& s) -> RandomLaw& { return s.nlos.episode_length_law; },
+               std::vector<std::pair<std::string, RandomLaw>>{{"exponential", RandomLaw::kExponential},
+                                                              {"lognormal", RandomLaw::kLogNormal}});
+    m["nlos.episode_length_shape"] =
+        real([](Scenario& s) -> double& { return s.nlos.episode_length_shape; }, 0, 3);
+    m["nlos.episode_bias_mean_m"] = real([](Scenario& s) -> double& { return s.nlos.episode_bias_mean_m; }, 0, 100);
+    m["nlos.episode_bias_law"] =
+        choice([](Scenario& s) -> RandomLaw& { return s.nlos.episode_bias_law; },
+               std::vector<std::pair<std::string, RandomLaw>>{{"exponential", RandomLaw::kExponential},
+                                                              {"lognormal", RandomLaw::kLogNormal}});
+    m["nlos.episode_extra_sigma_m"] =
+        real([](Scenario& s) -> double& { return s.nlos.episode_extra_sigma_m; }, 0, 100);
     m["nlos.box"] = [](Scenario& s, const std::string& v, std::string* why) {
       double x[6] = {0, 0, 0, 0, 0, 0};
       if (!parse_numbers(v, 6, x, why)) return false;
@@ -261,6 +383,23 @@ const std::map<std::string, Setter>& setters() {
       s.route.start_heading_deg = x[3];
       return true;
     };
+    m["route.kind"] = choice([](Scenario& s) -> RouteKind& { return s.route.kind; },
+                             std::vector<std::pair<std::string, RouteKind>>{
+                                 {"vehicle", RouteKind::kVehicle}, {"multicopter", RouteKind::kMulticopter}});
+    m["route.yaw"] = [](Scenario& s, const std::string& v, std::string* why) {
+      double x[2] = {0, 0};
+      if (!parse_numbers(v, 2, x, why)) return false;
+      if (!(x[1] >= 0.1) || x[1] > 1e6) {
+        *why = "yaw needs 'DEG DURATION_S' with a duration in [0.1, 1e6] s";
+        return false;
+      }
+      Maneuver mv;
+      mv.kind = ManeuverKind::kTurn;
+      mv.value = x[0];
+      mv.duration_s = x[1];
+      s.route.yaw_turns.push_back(mv);
+      return true;
+    };
     m["route.loop_from"] = [](Scenario& s, const std::string& v, std::string* why) {
       unsigned long idx = 0;
       if (!parse_id(v, 1000000, idx, why)) return false;
@@ -287,23 +426,36 @@ const std::map<std::string, Setter>& setters() {
       } else if (w[0] == "climb") {
         mv.kind = ManeuverKind::kClimb;
         nargs = 2;
+      } else if (w[0] == "goto") {
+        mv.kind = ManeuverKind::kGoto;
+        nargs = 4;
+      } else if (w[0] == "eight") {
+        mv.kind = ManeuverKind::kEight;
+        nargs = 5;
       } else {
-        *why = "unknown maneuver '" + w[0] + "' (hold, speed, turn, climb)";
+        *why = "unknown maneuver '" + w[0] + "' (hold, speed, turn, climb, goto, eight)";
         return false;
       }
       if (w.size() != nargs + 1) {
         *why = "maneuver '" + w[0] + "' needs " + std::to_string(nargs) + " number(s)";
         return false;
       }
-      double x[2] = {0, 0};
+      double x[5] = {0, 0, 0, 0, 0};
       for (size_t i = 0; i < nargs; ++i) {
         if (!parse_double(w[i + 1], x[i])) {
           *why = "not a finite number: '" + w[i + 1] + "'";
           return false;
         }
       }
-      mv.duration_s = nargs == 1 ? x[0] : x[1];
-      mv.value = nargs == 1 ? 0.0 : x[0];
+      mv.duration_s = x[nargs - 1];
+      mv.value = nargs == 2 ? x[0] : 0.0;
+      if (nargs > 2) {
+        for (size_t i = 0; i + 1 < nargs; ++i) mv.arg[i] = x[i];
+      }
+      if (mv.kind == ManeuverKind::kEight && (!(mv.arg[3] >= 1.0) || std::floor(mv.arg[3]) != mv.arg[3])) {
+        *why = "eight needs a whole number of loops >= 1";
+        return false;
+      }
       if (!(mv.duration_s >= 0.1) || mv.duration_s > 1e6) {
         *why = "maneuver duration must be in [0.1, 1e6] s";
         return false;
@@ -374,6 +526,63 @@ Status parse_into(const std::string& text, const std::string& origin, Scenario& 
 
 }  // namespace
 
+void snap_to_recording_precision(Scenario& s) {
+  // The recording carries gravity, anchors and lever arms as floats; simulate
+  // with exactly those values so the estimator sees the simulated site.
+  const auto to_float = [](double& x) { x = static_cast<double>(static_cast<float>(x)); };
+  to_float(s.gravity_mps2);
+  for (AnchorDef& a : s.anchors) {
+    for (double& x : a.pos_nav_m) to_float(x);
+  }
+  for (TagDef& t : s.tags) {
+    for (double& x : t.lever_body_m) to_float(x);
+  }
+}
+
+std::vector<std::string> imu_grade_names() { return {"consumer", "mems", "automotive"}; }
+
+bool apply_imu_grade(const std::string& grade, ImuConfig& imu) {
+  // consumer: phone / small-drone MEMS (accel 300-400 ug/sqrt(Hz), ARW 0.3-0.5
+  // deg/sqrt(h), turn-on 1-2 deg/s, 30-50 mg); mems: the seed 000 Table 1
+  // default; automotive: automotive/tactical-grade MEMS (50 ug/sqrt(Hz), 0.05
+  // deg/sqrt(h), 0.05 deg/s, 2 mg). Figures in the middle of those ranges.
+  if (grade == "consumer") {
+    imu.accel_noise_ug_per_sqrt_hz = 350.0;
+    imu.gyro_arw_dps_per_sqrt_h = 0.4;
+    imu.gyro_bias_sigma_dps = 1.5;
+    imu.accel_bias_sigma_mg = 40.0;
+    imu.gyro_bias_rw_dps_per_sqrt_s = 0.002;
+    imu.accel_bias_rw_mps2_per_sqrt_s = 2e-4;
+    imu.gyro_range_dps = 2000.0;
+    imu.accel_range_g = 16.0;
+    return true;
+  }
+  if (grade == "mems") {
+    const ImuConfig d;
+    imu.accel_noise_ug_per_sqrt_hz = d.accel_noise_ug_per_sqrt_hz;
+    imu.gyro_arw_dps_per_sqrt_h = d.gyro_arw_dps_per_sqrt_h;
+    imu.gyro_bias_sigma_dps = d.gyro_bias_sigma_dps;
+    imu.accel_bias_sigma_mg = d.accel_bias_sigma_mg;
+    imu.gyro_bias_rw_dps_per_sqrt_s = d.gyro_bias_rw_dps_per_sqrt_s;
+    imu.accel_bias_rw_mps2_per_sqrt_s = d.accel_bias_rw_mps2_per_sqrt_s;
+    imu.gyro_range_dps = d.gyro_range_dps;
+    imu.accel_range_g = d.accel_range_g;
+    return true;
+  }
+  if (grade == "automotive") {
+    imu.accel_noise_ug_per_sqrt_hz = 50.0;
+    imu.gyro_arw_dps_per_sqrt_h = 0.05;
+    imu.gyro_bias_sigma_dps = 0.05;
+    imu.accel_bias_sigma_mg = 2.0;
+    imu.gyro_bias_rw_dps_per_sqrt_s = 0.0001;
+    imu.accel_bias_rw_mps2_per_sqrt_s = 1e-5;
+    imu.gyro_range_dps = 300.0;
+    imu.accel_range_g = 10.0;
+    return true;
+  }
+  return false;
+}
+
 std::vector<std::string> scenario_keys() {
   std::vector<std::string> keys;
   keys.reserve(setters().size());
@@ -385,16 +594,7 @@ Status parse_scenario(const std::string& text, const std::string& origin, Scenar
   Scenario s;
   const Status st = parse_into(text, origin, s, error, 0);
   if (!ok(st)) return st;
-  // The recording carries gravity, anchors and lever arms as floats; simulate
-  // with exactly those values so the estimator sees the simulated site.
-  const auto to_float = [](double& x) { x = static_cast<double>(static_cast<float>(x)); };
-  to_float(s.gravity_mps2);
-  for (AnchorDef& a : s.anchors) {
-    for (double& x : a.pos_nav_m) to_float(x);
-  }
-  for (TagDef& t : s.tags) {
-    for (double& x : t.lever_body_m) to_float(x);
-  }
+  snap_to_recording_precision(s);
   const Status v = validate_scenario(s, error);
   if (!ok(v)) {
     if (error != nullptr) *error = origin + ": " + *error;
@@ -434,11 +634,49 @@ Status validate_scenario(const Scenario& s, std::string* error) {
   if (std::fabs(imu_period_us - std::round(imu_period_us)) > 1e-6) {
     return fail(error, "imu.rate_hz must divide 1e6 us into an integer period");
   }
-  const double uwb_period_us = 1e6 / s.uwb.rate_hz;
-  if (std::fabs(uwb_period_us - std::round(uwb_period_us)) > 1e-6) {
-    return fail(error, "uwb.rate_hz must divide 1e6 us into an integer period");
+  if (s.uwb.schedule == UwbSchedule::kRoundRobin) {
+    const double uwb_period_us = 1e6 / s.uwb.rate_hz;
+    if (std::fabs(uwb_period_us - std::round(uwb_period_us)) > 1e-6) {
+      return fail(error, "uwb.rate_hz must divide 1e6 us into an integer period");
+    }
   }
-  if (s.uwb.offset_ms * 1e3 >= uwb_period_us) return fail(error, "uwb.offset_ms must be shorter than the range period");
+  const double slots_per_s = s.uwb.schedule == UwbSchedule::kPerAnchor
+                                 ? s.uwb.rate_hz * static_cast<double>(s.anchors.size())
+                                 : s.uwb.rate_hz;
+  if (slots_per_s > 10000.0) return fail(error, "uwb: more than 10000 range slots per second per tag");
+  if (s.uwb.offset_ms * 1e3 >= 1e6 / slots_per_s) {
+    return fail(error, "uwb.offset_ms must be shorter than the range period");
+  }
+  for (const RangeOffset& o : s.uwb.anchor_offsets) {
+    if (anchor_ids.count(o.anchor_id) == 0) return fail(error, "uwb.anchor_offset: unknown anchor " + std::to_string(o.anchor_id));
+  }
+  for (const RangeOffset& o : s.uwb.tag_offsets) {
+    if (tag_ids.count(o.tag_id) == 0) return fail(error, "uwb.tag_offset: unknown tag " + std::to_string(o.tag_id));
+  }
+  for (const RangeOffset& o : s.uwb.pair_offsets) {
+    if (anchor_ids.count(o.anchor_id) == 0 || tag_ids.count(o.tag_id) == 0) {
+      return fail(error, "uwb.pair_offset: unknown anchor " + std::to_string(o.anchor_id) + " or tag " +
+                             std::to_string(o.tag_id));
+    }
+  }
+  if (s.uwb.block_anchors > s.anchors.size()) return fail(error, "uwb.block_anchors exceeds the number of anchors");
+  if (s.uwb.block_max_s < s.uwb.block_min_s) return fail(error, "uwb.block_max_s < uwb.block_min_s");
+  if (s.uwb.block_gap_max_s < s.uwb.block_gap_min_s) return fail(error, "uwb.block_gap_max_s < uwb.block_gap_min_s");
+  if (s.uwb.block_anchors > 0 && s.uwb.block_gap_max_s <= 0.0 && s.uwb.block_min_s <= 0.0) {
+    return fail(error, "uwb: blockage schedule needs a positive gap or blockage length");
+  }
+  if (s.imu.vibration_hz > 0.0 && s.imu.vibration_hz >= 0.5 * s.imu.rate_hz) {
+    return fail(error, "imu.vibration_hz must be below the Nyquist frequency (rate_hz / 2)");
+  }
+  const bool copter = s.route.kind == RouteKind::kMulticopter;
+  for (const Maneuver& mv : s.route.maneuvers) {
+    const bool air_only = mv.kind == ManeuverKind::kGoto || mv.kind == ManeuverKind::kEight;
+    const bool ground_only =
+        mv.kind == ManeuverKind::kSpeed || mv.kind == ManeuverKind::kTurn || mv.kind == ManeuverKind::kClimb;
+    if (copter && ground_only) return fail(error, "route.kind = multicopter takes hold, goto and eight maneuvers only");
+    if (!copter && air_only) return fail(error, "goto and eight maneuvers need route.kind = multicopter");
+  }
+  if (!copter && !s.route.yaw_turns.empty()) return fail(error, "route.yaw needs route.kind = multicopter");
   if (s.nlos.outlier_max_m < s.nlos.outlier_min_m) return fail(error, "nlos.outlier_max_m < nlos.outlier_min_m");
   if (s.nlos.protocol_mean_max_m < s.nlos.protocol_mean_min_m) {
     return fail(error, "nlos.protocol_mean_max_m < nlos.protocol_mean_min_m");

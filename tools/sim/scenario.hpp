@@ -18,12 +18,44 @@ enum class ManeuverKind : uint8_t {
   kSpeed = 1,  // change speed to value [m/s] over duration_s
   kTurn = 2,   // change heading by value [deg, CCW positive] over duration_s at the current speed
   kClimb = 3,  // change height by value [m] over duration_s (level body)
+  // Multicopter route (route.kind = multicopter) only; rest-to-rest profiles with
+  // the 7th-order smooth step (continuous jerk, so the body rates are continuous):
+  kGoto = 4,   // fly to (arg[0], arg[1], arg[2]) [m] over duration_s
+  kEight = 5,  // figure-eight about the current point: x' = arg[0] sin(phi), y' = arg[1] sin(2 phi) [m],
+               // axes rotated by arg[2] [deg], arg[3] loops over duration_s
 };
 
 struct Maneuver {
   ManeuverKind kind = ManeuverKind::kHold;
   double value = 0.0;       // target speed [m/s], turn [deg] or climb [m]; unused for hold
   double duration_s = 1.0;  // [s], > 0
+  double arg[4] = {0, 0, 0, 0};  // goto / eight arguments (see ManeuverKind)
+};
+
+// How the route is flown (docs/simulator.md "Truth").
+enum class RouteKind : uint8_t {
+  kVehicle = 0,      // ground vehicle: speed / turn / climb along the heading, suspension attitude
+  kMulticopter = 1,  // 3-D position profile, tilt from the commanded acceleration, independent yaw
+};
+
+// Range schedule of the radios (docs/simulator.md "UWB model").
+enum class UwbSchedule : uint8_t {
+  kRoundRobin = 0,  // rate_hz ranges per second per tag, round-robin over the anchors
+  kPerAnchor = 1,   // rate_hz ranges per second per anchor and tag, round-robin (total rate x anchors)
+  kFrame = 2,       // every 1 / rate_hz each tag ranges every anchor at the same time stamp
+};
+
+// Distribution of NLOS episode lengths and biases.
+enum class RandomLaw : uint8_t {
+  kExponential = 0,
+  kLogNormal = 1,
+};
+
+// Constant range offset (antenna delay) of one anchor, one tag or one anchor/tag pair.
+struct RangeOffset {
+  uint16_t anchor_id = 0;  // unused for a tag offset
+  uint8_t tag_id = 0;      // unused for an anchor offset
+  double offset_m = 0.0;   // added to every range of that anchor / tag / pair [m]
 };
 
 struct AnchorDef {
@@ -61,15 +93,45 @@ struct ImuConfig {
   double accel_range_g = 5.0;                   // saturation (seed 000 Table 1) [g]
   double gyro_lsb_dps = 0.0;                    // quantisation step, 0 = off [deg/s]
   double accel_lsb_mg = 0.0;                    // quantisation step, 0 = off [mg]
+  // Vibration (multicopter rotors): extra zero-mean noise per axis, white when
+  // vibration_hz = 0, else band-limited around vibration_hz (resonator).
+  double vibration_accel_mps2 = 0.0;            // RMS per axis [m/s^2]
+  double vibration_gyro_dps = 0.0;              // RMS per axis [deg/s]
+  double vibration_hz = 0.0;                    // centre frequency, 0 = white [Hz]
+  double vibration_bandwidth_hz = 5.0;          // -3 dB bandwidth of the resonator [Hz]
 };
 
 struct UwbConfig {
-  double rate_hz = 50.0;            // ranging rate per tag, round-robin over anchors [Hz]
+  double rate_hz = 50.0;            // ranging rate per tag (schedule round_robin) or per anchor [Hz]
+  UwbSchedule schedule = UwbSchedule::kRoundRobin;
   double offset_ms = 3.0;           // time of the first range after t = 0 [ms]
   double sigma_m = 0.10;            // LOS ranging noise 1-sigma (seed 000 Table 1) [m]
   double packet_loss = 0.02;        // probability a range slot produces nothing [-]
   bool channel_diagnostics = true;  // write fp_power_dbm / rx_power_dbm
   std::vector<Outage> outages;
+  double range_lsb_m = 0.0;         // range quantisation step, 0 = off [m]
+  // Constant offsets per run (antenna delays): drawn N(0, sigma) per anchor,
+  // per tag and per pair, or given explicitly (an explicit value replaces the draw).
+  double anchor_offset_sigma_m = 0.0;  // [m]
+  double tag_offset_sigma_m = 0.0;     // [m]
+  double pair_offset_sigma_m = 0.0;    // [m]
+  std::vector<RangeOffset> anchor_offsets;
+  std::vector<RangeOffset> tag_offsets;
+  std::vector<RangeOffset> pair_offsets;
+  // Scale error (clock drift): measured = (1 + s) true + ..., s = common + N(0, pair sigma) per pair.
+  double scale_common_pct = 0.0;       // [%]
+  double scale_pair_sigma_pct = 0.0;   // [%]
+  // Gilbert-Elliott burst loss per anchor/tag pair: long-run share of ranges
+  // lost in bursts and mean burst length, on top of the independent packet_loss.
+  double burst_loss = 0.0;             // [-]
+  double burst_mean_len = 5.0;         // mean burst length [ranges of that pair]
+  // Anchor blockage schedule: after a gap U[gap_min, gap_max], block_anchors
+  // random anchors fall silent for U[block_min, block_max]; repeat.
+  size_t block_anchors = 0;            // anchors blocked at a time, 0 = off
+  double block_min_s = 5.0;            // [s]
+  double block_max_s = 20.0;           // [s]
+  double block_gap_min_s = 10.0;       // [s]
+  double block_gap_max_s = 30.0;       // [s]
 };
 
 struct NlosConfig {
@@ -91,6 +153,15 @@ struct NlosConfig {
   double protocol_mean_min_m = 1.0;   // per-range mean of the added error ~ U[min, max] [m]
   double protocol_mean_max_m = 2.0;   // [m]
   double protocol_spread_m = 0.3;     // Gaussian spread around that mean [m]
+  // Random NLOS episodes independent of geometry: per anchor/tag pair an
+  // alternating renewal process of LOS stretches and NLOS episodes.
+  double episode_share = 0.0;              // long-run share of time in NLOS, 0 = off [-]
+  double episode_mean_s = 2.0;             // mean NLOS episode length [s]
+  RandomLaw episode_length_law = RandomLaw::kExponential;
+  double episode_length_shape = 1.0;       // log-space sigma of log-normal lengths [-]
+  double episode_bias_mean_m = 0.5;        // mean episode bias [m]
+  RandomLaw episode_bias_law = RandomLaw::kLogNormal;  // log-normal uses bias_shape
+  double episode_extra_sigma_m = 0.10;     // extra Gaussian noise of episode ranges [m]
 };
 
 struct ChannelConfig {
@@ -110,10 +181,16 @@ struct VehicleConfig {
 };
 
 struct RouteConfig {
+  RouteKind kind = RouteKind::kVehicle;
   double start_nav_m[3] = {0, 0, 0};  // body origin at t = 0 [m]
   double start_heading_deg = 0.0;     // yaw of body x from nav x, CCW [deg]
   size_t loop_from = 0;               // maneuver index the route repeats from when exhausted
   std::vector<Maneuver> maneuvers;    // empty: parked for the whole run
+  std::vector<Maneuver> yaw_turns;    // multicopter: heading changes on their own timeline (kTurn; 0 deg = hold)
+};
+
+struct SiteErrors {
+  double survey_sigma_m = 0.0;  // anchors.csv = true position + N(0, sigma) per axis [m]
 };
 
 struct Scenario {
@@ -122,8 +199,9 @@ struct Scenario {
   double duration_s = 60.0;
   std::string platform = "ground";    // ground | air
   double gravity_mps2 = 9.80665;      // rounded to float on load (the value the recording carries)
-  std::vector<AnchorDef> anchors;
+  std::vector<AnchorDef> anchors;     // true antenna positions (ranges are made from these)
   std::vector<TagDef> tags;
+  SiteErrors site;
   ImuConfig imu;
   UwbConfig uwb;
   NlosConfig nlos;
@@ -151,5 +229,14 @@ std::vector<std::string> scenario_keys();
 
 // Consistency checks after parsing (ids, rates, probabilities, geometry).
 [[nodiscard]] Status validate_scenario(const Scenario& s, std::string* error);
+
+// Rounds gravity, anchor positions and lever arms to float, the precision the
+// recording carries (parse_scenario does this; scenarios built in code call it).
+void snap_to_recording_precision(Scenario& s);
+
+// Named IMU grades (imu.grade): sets the noise, bias and range figures of `imu`.
+// False when `grade` is unknown. Grades: consumer, mems (the default), automotive.
+bool apply_imu_grade(const std::string& grade, ImuConfig& imu);
+std::vector<std::string> imu_grade_names();
 
 }  // namespace uwbnav::sim

@@ -23,6 +23,13 @@ constexpr uint64_t kStreamImu = 0x494D55ULL;        // "IMU"
 constexpr uint64_t kStreamSlot = 0x534C4F54ULL;     // "SLOT": per range slot
 constexpr uint64_t kStreamEpisode = 0x45504953ULL;  // "EPIS": NLOS episode biases
 constexpr uint64_t kStreamProtocol = 0x50524F54ULL; // "PROT"
+constexpr uint64_t kStreamVibration = 0x56494252ULL; // "VIBR": IMU vibration
+constexpr uint64_t kStreamSurvey = 0x53555256ULL;   // "SURV": anchor survey errors
+constexpr uint64_t kStreamOffset = 0x4F464653ULL;   // "OFFS": range offsets and scale errors
+constexpr uint64_t kStreamRenewal = 0x52454E57ULL;  // "RENW": random NLOS episodes per pair
+constexpr uint64_t kStreamBurst = 0x42525354ULL;    // "BRST": Gilbert-Elliott state per pair
+constexpr uint64_t kStreamBlock = 0x424C434BULL;    // "BLCK": anchor blockage schedule
+constexpr uint64_t kStreamSlot2 = 0x534C5432ULL;    // "SLT2": per-slot draws of the episode model
 
 std::string fmt(double v) {
   char buf[64];
@@ -65,6 +72,9 @@ void fill_meta(const Scenario& sc, const SimOptions& opt, dataset::Recording& re
   rec.meta["imu_rate_hz"] = fmt(sc.imu.rate_hz);
   rec.meta["uwb_rate_hz"] = fmt(sc.uwb.rate_hz);
   rec.meta["seed"] = std::to_string(opt.seed);
+  if (sc.uwb.schedule != UwbSchedule::kRoundRobin) {
+    rec.meta["sim_uwb_schedule"] = sc.uwb.schedule == UwbSchedule::kFrame ? "frame" : "per_anchor";
+  }
   if (!sc.uwb.outages.empty()) {
     std::string list;
     for (const Outage& o : sc.uwb.outages) {
@@ -77,9 +87,154 @@ void fill_meta(const Scenario& sc, const SimOptions& opt, dataset::Recording& re
   if (opt.ideal_uwb) rec.meta["sim_ideal_uwb"] = "1";
 }
 
-Status fill_site(const Scenario& sc, SiteConfig& site, std::string* error) {
+// Simulator facts of the new error models (evaluation only; the firmware never reads meta.ini).
+void fill_meta_errors(const Scenario& sc, const SimOptions& opt, const SimOutput& out, dataset::Recording& rec) {
+  if (opt.ideal_uwb) return;
+  if (sc.site.survey_sigma_m > 0.0) {
+    for (const AnchorDef& a : sc.anchors) {
+      rec.meta["sim_anchor_true_" + std::to_string(a.id)] =
+          fmt(a.pos_nav_m[0]) + " " + fmt(a.pos_nav_m[1]) + " " + fmt(a.pos_nav_m[2]);
+    }
+  }
+  for (const PairError& e : out.pair_errors) {
+    const std::string key = std::to_string(e.anchor_id) + "_" + std::to_string(e.tag_id);
+    if (e.offset_m != 0.0) rec.meta["sim_range_offset_m_" + key] = fmt(e.offset_m);
+    if (e.scale != 0.0) rec.meta["sim_range_scale_" + key] = fmt(e.scale);
+  }
+  if (!out.blockages.empty()) {
+    std::string list;
+    for (const Blockage& b : out.blockages) {
+      if (!list.empty()) list += ' ';
+      list += "[" + fmt(b.start_s) + "," + fmt(b.end_s) + "):";
+      for (size_t i = 0; i < b.anchor_ids.size(); ++i) list += (i ? "," : "") + std::to_string(b.anchor_ids[i]);
+    }
+    rec.meta["sim_blockages_s"] = list;
+  }
+  if (sc.nlos.episode_share > 0.0) rec.meta["sim_episode_share"] = fmt(sc.nlos.episode_share);
+}
+
+// anchors.csv positions: the truth plus N(0, survey_sigma_m) per axis, rounded to float.
+std::vector<AnchorDef> survey_anchors(const Scenario& sc, const SimOptions& opt) {
+  std::vector<AnchorDef> out = sc.anchors;
+  if (opt.ideal_uwb || sc.site.survey_sigma_m <= 0.0) return out;
+  Rng rng(mix_seed(opt.seed, kStreamSurvey));
+  for (AnchorDef& a : out) {
+    for (double& x : a.pos_nav_m) {
+      x = static_cast<double>(static_cast<float>(x + sc.site.survey_sigma_m * rng.normal()));
+    }
+  }
+  return out;
+}
+
+// Offsets and scale errors per (tag, anchor), tag-major: drawn N(0, sigma)
+// per anchor, per tag and per pair; explicit values replace the draws.
+std::vector<PairError> draw_pair_errors(const Scenario& sc, const SimOptions& opt) {
+  const UwbConfig& u = sc.uwb;
+  std::vector<PairError> out;
+  out.reserve(sc.tags.size() * sc.anchors.size());
+  Rng ra(mix_seed(opt.seed, kStreamOffset, 1));
+  Rng rt(mix_seed(opt.seed, kStreamOffset, 2));
+  Rng rp(mix_seed(opt.seed, kStreamOffset, 3));
+  Rng rs(mix_seed(opt.seed, kStreamOffset, 4));
+  std::vector<double> anchor_off(sc.anchors.size());
+  std::vector<double> tag_off(sc.tags.size());
+  for (size_t a = 0; a < sc.anchors.size(); ++a) {
+    anchor_off[a] = u.anchor_offset_sigma_m * ra.normal();
+    for (const RangeOffset& o : u.anchor_offsets) {
+      if (o.anchor_id == sc.anchors[a].id) anchor_off[a] = o.offset_m;
+    }
+  }
+  for (size_t j = 0; j < sc.tags.size(); ++j) {
+    tag_off[j] = u.tag_offset_sigma_m * rt.normal();
+    for (const RangeOffset& o : u.tag_offsets) {
+      if (o.tag_id == sc.tags[j].id) tag_off[j] = o.offset_m;
+    }
+  }
+  for (size_t j = 0; j < sc.tags.size(); ++j) {
+    for (size_t a = 0; a < sc.anchors.size(); ++a) {
+      PairError e;
+      e.anchor_id = sc.anchors[a].id;
+      e.tag_id = sc.tags[j].id;
+      double pair = u.pair_offset_sigma_m * rp.normal();
+      for (const RangeOffset& o : u.pair_offsets) {
+        if (o.anchor_id == e.anchor_id && o.tag_id == e.tag_id) pair = o.offset_m;
+      }
+      e.offset_m = opt.ideal_uwb ? 0.0 : anchor_off[a] + tag_off[j] + pair;
+      const double scale_pct = u.scale_common_pct + u.scale_pair_sigma_pct * rs.normal();
+      e.scale = opt.ideal_uwb ? 0.0 : 0.01 * scale_pct;
+      out.push_back(e);
+    }
+  }
+  return out;
+}
+
+// Blockage schedule: gap U[gap_min, gap_max], then block_anchors distinct random
+// anchors silent for U[block_min, block_max], repeated to the end of the run.
+std::vector<Blockage> draw_blockages(const Scenario& sc, const SimOptions& opt) {
+  std::vector<Blockage> out;
+  const UwbConfig& u = sc.uwb;
+  if (u.block_anchors == 0) return out;
+  Rng rng(mix_seed(opt.seed, kStreamBlock));
+  double t = rng.uniform(u.block_gap_min_s, u.block_gap_max_s);
+  while (t < sc.duration_s) {
+    std::vector<size_t> idx(sc.anchors.size());
+    for (size_t i = 0; i < idx.size(); ++i) idx[i] = i;
+    Blockage b;
+    for (size_t m = 0; m < u.block_anchors; ++m) {
+      const size_t pick = m + static_cast<size_t>(rng.below(idx.size() - m));
+      std::swap(idx[m], idx[pick]);
+      b.anchor_ids.push_back(sc.anchors[idx[m]].id);
+    }
+    b.start_s = t;
+    b.end_s = t + rng.uniform(u.block_min_s, u.block_max_s);
+    out.push_back(b);
+    t = b.end_s + rng.uniform(u.block_gap_min_s, u.block_gap_max_s);
+  }
+  return out;
+}
+
+// Random NLOS episodes of one pair: alternating LOS stretches and NLOS episodes
+// (alternating renewal process). The NLOS mean length is episode_mean_s, the
+// LOS mean episode_mean_s (1 - share) / share, so the long-run NLOS share of
+// time is `share`; the process starts in NLOS with probability `share`.
+struct EpisodeInterval {
+  uint64_t start_us = 0;
+  uint64_t end_us = 0;
+  double bias_m = 0.0;  // episode bias [m]
+};
+
+std::vector<EpisodeInterval> draw_episodes(const NlosConfig& nl, uint64_t seed, uint64_t pair, uint64_t dur_us) {
+  std::vector<EpisodeInterval> out;
+  if (nl.episode_share <= 0.0) return out;
+  Rng rng(mix_seed(seed, kStreamRenewal, pair));
+  const double mean_nlos = nl.episode_mean_s;
+  const double mean_los = nl.episode_mean_s * (1.0 - nl.episode_share) / nl.episode_share;
+  const auto length = [&](double mean) {
+    return nl.episode_length_law == RandomLaw::kExponential ? rng.exponential(mean)
+                                                            : rng.lognormal_mean(mean, nl.episode_length_shape);
+  };
+  bool in_nlos = rng.uniform() < nl.episode_share;
+  double t = 0.0;
+  const double end_s = static_cast<double>(dur_us) * 1e-6;
+  while (t < end_s) {
+    const double len = length(in_nlos ? mean_nlos : mean_los);
+    if (in_nlos) {
+      EpisodeInterval e;
+      e.start_us = static_cast<uint64_t>(std::llround(t * 1e6));
+      e.end_us = static_cast<uint64_t>(std::llround((t + len) * 1e6));
+      e.bias_m = nl.episode_bias_law == RandomLaw::kExponential ? rng.exponential(nl.episode_bias_mean_m)
+                                                                 : rng.lognormal_mean(nl.episode_bias_mean_m, nl.bias_shape);
+      out.push_back(e);
+    }
+    t += len;
+    in_nlos = !in_nlos;
+  }
+  return out;
+}
+
+Status fill_site(const Scenario& sc, const std::vector<AnchorDef>& anchors, SiteConfig& site, std::string* error) {
   site = SiteConfig{};
-  for (const AnchorDef& a : sc.anchors) {
+  for (const AnchorDef& a : anchors) {
     if (!ok(site.add_anchor(a.id, to_vec3f(a.pos_nav_m)))) {
       if (error != nullptr) *error = "cannot add anchor " + std::to_string(a.id);
       return Status::kInvalidArgument;
@@ -96,6 +251,53 @@ Status fill_site(const Scenario& sc, SiteConfig& site, std::string* error) {
   site.has_imu = sc.imu.enabled;
   return Status::kOk;
 }
+
+// Vibration noise of three axes: white, or a second-order resonator driven by
+// white noise (AR(2) with poles r e^{+-j theta}, r = exp(-pi B dt), theta =
+// 2 pi f dt) scaled to the requested RMS by its stationary variance
+// gamma0 = s^2 (1 - a2) / ((1 + a2) ((1 - a2)^2 - a1^2)) for x_k = a1 x_k-1 + a2 x_k-2 + e_k.
+class Vibration {
+ public:
+  Vibration(double rms, const ImuConfig& c, double dt_s, uint64_t seed) : rng_(seed), rms_(rms) {
+    if (rms <= 0.0 || c.vibration_hz <= 0.0) {
+      drive_ = rms;
+      return;
+    }
+    resonant_ = true;
+    const double r = std::exp(-kPi * c.vibration_bandwidth_hz * dt_s);
+    a1_ = 2.0 * r * std::cos(2.0 * kPi * c.vibration_hz * dt_s);
+    a2_ = -r * r;
+    const double gain = (1.0 - a2_) / ((1.0 + a2_) * ((1.0 - a2_) * (1.0 - a2_) - a1_ * a1_));
+    drive_ = rms / std::sqrt(gain);
+    // Settle to the stationary state before t = 0 (many time constants 1 / (pi B)).
+    const int settle = static_cast<int>(10.0 / (kPi * c.vibration_bandwidth_hz * dt_s)) + 1;
+    double dummy[3] = {0, 0, 0};
+    for (int k = 0; k < settle; ++k) add(dummy);
+  }
+  void add(double v[3]) {
+    if (rms_ <= 0.0) return;
+    for (int i = 0; i < 3; ++i) {
+      const double e = drive_ * rng_.normal();
+      if (!resonant_) {
+        v[i] += e;
+        continue;
+      }
+      const double x = a1_ * x1_[i] + a2_ * x2_[i] + e;
+      x2_[i] = x1_[i];
+      x1_[i] = x;
+      v[i] += x;
+    }
+  }
+
+ private:
+  Rng rng_;
+  double rms_ = 0.0;
+  bool resonant_ = false;
+  double drive_ = 0.0;
+  double a1_ = 0.0, a2_ = 0.0;
+  double x1_[3] = {0, 0, 0};
+  double x2_[3] = {0, 0, 0};
+};
 
 // IMU at rate_hz with turn-on biases, bias random walks, white noise,
 // saturation and quantisation (seed 000 Table 1 figures by default).
@@ -122,6 +324,8 @@ void simulate_imu(const Scenario& sc, const SimOptions& opt, const Trajectory& t
   const double accel_limit = c.accel_range_g * g;
   const double gyro_lsb = noisy ? c.gyro_lsb_dps * kDeg : 0.0;
   const double accel_lsb = noisy ? c.accel_lsb_mg * 1e-3 * g : 0.0;
+  Vibration vib_gyro(c.vibration_gyro_dps * kDeg, c, dt_s, mix_seed(opt.seed, kStreamVibration, 1));
+  Vibration vib_accel(c.vibration_accel_mps2, c, dt_s, mix_seed(opt.seed, kStreamVibration, 2));
 
   out.truth.reserve(n);
   out.rec.truth.reserve(n);
@@ -163,6 +367,8 @@ void simulate_imu(const Scenario& sc, const SimOptions& opt, const Trajectory& t
       for (int i = 0; i < 3; ++i) accel[i] += accel_bias[i] + accel_sigma * rng.normal();
       for (double& b : gyro_bias) b += gyro_rw * rng.normal();
       for (double& b : accel_bias) b += accel_rw * rng.normal();
+      vib_gyro.add(gyro);
+      vib_accel.add(accel);
     }
     ImuSample s;
     s.t_us = t_us;
@@ -194,126 +400,233 @@ bool body_blocks(const Eigen::Vector3d& dir_body, double cone_deg) {
   return bearing_from_rear <= cone_deg * kDeg;
 }
 
-// UWB: per tag rate_hz round-robin over the anchors, stamped at the ranging
-// instant (offset_ms after the IMU grid), with geometry NLOS, outliers, packet
-// loss, outages and DW1000-style channel diagnostics.
+// Calls visit(t_us, tag index, anchor index, slot id) for every range slot in
+// time order. round_robin: tag j's slot k at offset + k / rate + j / (rate n_tags)
+// ranges anchor (k + j) mod n_anchors, slot id k n_tags + j; per_anchor: the same
+// at rate x n_anchors (stamps rounded to the microsecond); frame: every tag
+// ranges every anchor at offset + k / rate, slot id (k n_tags + j) n_anchors + a.
+template <typename Visit>
+void for_each_slot(const Scenario& sc, uint64_t dur_us, Visit visit) {
+  const size_t n_anchors = sc.anchors.size();
+  const size_t n_tags = sc.tags.size();
+  const uint64_t offset_us = static_cast<uint64_t>(std::llround(sc.uwb.offset_ms * 1e3));
+  if (sc.uwb.schedule == UwbSchedule::kRoundRobin) {
+    const uint64_t period_us = static_cast<uint64_t>(std::llround(1e6 / sc.uwb.rate_hz));
+    const uint64_t tag_step_us = period_us / n_tags;
+    for (uint64_t k = 0;; ++k) {
+      const uint64_t slot_t0 = offset_us + k * period_us;
+      if (slot_t0 >= dur_us) return;
+      for (size_t j = 0; j < n_tags; ++j) {
+        const uint64_t t_us = slot_t0 + j * tag_step_us;
+        if (t_us >= dur_us) break;
+        visit(t_us, j, static_cast<size_t>((k + j) % n_anchors), k * n_tags + j);
+      }
+    }
+  }
+  if (sc.uwb.schedule == UwbSchedule::kPerAnchor) {
+    const double period_us = 1e6 / (sc.uwb.rate_hz * static_cast<double>(n_anchors));
+    for (uint64_t k = 0;; ++k) {
+      const uint64_t slot_t0 = offset_us + static_cast<uint64_t>(std::llround(static_cast<double>(k) * period_us));
+      if (slot_t0 >= dur_us) return;
+      for (size_t j = 0; j < n_tags; ++j) {
+        const uint64_t t_us =
+            slot_t0 + static_cast<uint64_t>(std::llround(static_cast<double>(j) * period_us / static_cast<double>(n_tags)));
+        if (t_us >= dur_us) break;
+        visit(t_us, j, static_cast<size_t>((k + j) % n_anchors), k * n_tags + j);
+      }
+    }
+  }
+  const double period_us = 1e6 / sc.uwb.rate_hz;
+  for (uint64_t k = 0;; ++k) {
+    const uint64_t t_us = offset_us + static_cast<uint64_t>(std::llround(static_cast<double>(k) * period_us));
+    if (t_us >= dur_us) return;
+    for (size_t j = 0; j < n_tags; ++j) {
+      for (size_t a = 0; a < n_anchors; ++a) visit(t_us, j, a, (k * n_tags + j) * n_anchors + a);
+    }
+  }
+}
+
+// Gilbert-Elliott two-state loss of one pair, stepped once per slot of that
+// pair: the bad state loses every range, mean stay 1 / r = burst_mean_len, and
+// p = r share / (1 - share) so the long-run bad share is `share`.
+struct BurstState {
+  explicit BurstState(uint64_t seed) : rng(seed) {}
+  Rng rng;
+  bool bad = false;
+  bool started = false;
+  bool step(double share, double mean_len) {
+    const double r = 1.0 / mean_len;
+    const double p = r * share / (1.0 - share);
+    if (!started) {
+      started = true;
+      bad = rng.uniform() < share;
+    } else {
+      const double u = rng.uniform();
+      bad = bad ? u >= r : u < p;
+    }
+    return bad;
+  }
+};
+
+// UWB ranges on the slot schedule (for_each_slot), stamped at the ranging
+// instant: scale error and offsets, noise, geometry NLOS, random NLOS episodes,
+// outliers, packet and burst loss, outages, anchor blockages, quantisation and
+// DW1000-style channel diagnostics.
 void simulate_uwb(const Scenario& sc, const SimOptions& opt, const Trajectory& traj, uint64_t dur_us,
                   SimOutput& out) {
   const size_t n_anchors = sc.anchors.size();
   const size_t n_tags = sc.tags.size();
-  const uint64_t period_us = static_cast<uint64_t>(std::llround(1e6 / sc.uwb.rate_hz));
-  const uint64_t offset_us = static_cast<uint64_t>(std::llround(sc.uwb.offset_ms * 1e3));
-  const uint64_t tag_step_us = period_us / n_tags;
   const NlosConfig& nl = sc.nlos;
   const ChannelConfig& ch = sc.channel;
   const bool noisy = !opt.ideal_uwb;
   const double packet_loss = noisy ? sc.uwb.packet_loss : 0.0;
+  const double burst_loss = noisy ? sc.uwb.burst_loss : 0.0;
   const double sigma = noisy ? sc.uwb.sigma_m : 0.0;
   const double outlier_prob = noisy ? nl.outlier_prob : 0.0;
+  const double lsb = noisy ? sc.uwb.range_lsb_m : 0.0;
   const double ln_out_min = std::log(nl.outlier_min_m);
   const double ln_out_max = std::log(nl.outlier_max_m);
 
   std::vector<Episode> box_ep(n_tags * n_anchors);
   std::vector<Episode> body_ep(n_tags * n_anchors);
-  out.rec.uwb.reserve(static_cast<size_t>(dur_us / period_us + 1) * n_tags);
+  std::vector<std::vector<EpisodeInterval>> episodes(n_tags * n_anchors);
+  std::vector<size_t> episode_cursor(n_tags * n_anchors, 0);
+  std::vector<BurstState> bursts;
+  bursts.reserve(n_tags * n_anchors);
+  for (size_t p = 0; p < n_tags * n_anchors; ++p) {
+    if (noisy) episodes[p] = draw_episodes(nl, opt.seed, p, dur_us);
+    bursts.emplace_back(mix_seed(opt.seed, kStreamBurst, p));
+  }
+  // Ranges per second over all tags (round-robin: rate per tag; otherwise per anchor and tag).
+  const double slots_per_s = sc.uwb.rate_hz * static_cast<double>(
+                                                  sc.uwb.schedule == UwbSchedule::kRoundRobin ? n_tags : n_anchors * n_tags);
+  out.rec.uwb.reserve(static_cast<size_t>(static_cast<double>(dur_us) * 1e-6 * slots_per_s) + n_tags * n_anchors);
   out.range_truth.reserve(out.rec.uwb.capacity());
 
-  for (uint64_t k = 0;; ++k) {
-    const uint64_t slot_t0 = offset_us + k * period_us;
-    if (slot_t0 >= dur_us) break;
-    for (size_t j = 0; j < n_tags; ++j) {
-      const uint64_t t_us = slot_t0 + j * tag_step_us;
-      if (t_us >= dur_us) break;
-      const size_t a = static_cast<size_t>((k + j) % n_anchors);
-      const uint64_t slot_id = k * n_tags + j;
-      const AnchorDef& anchor = sc.anchors[a];
-      const TagDef& tag = sc.tags[j];
-
-      // Every slot draws the same numbers in the same order, used or not.
-      Rng r(mix_seed(opt.seed, kStreamSlot, slot_id));
-      const double u_loss = r.uniform();
-      const double n_range = r.normal();
-      const double u_outlier = r.uniform();
-      const double u_out_mag = r.uniform();
-      const double u_out_sign = r.uniform();
-      const double n_box_jitter = r.normal();
-      const double n_box_extra = r.normal();
-      const double n_body_jitter = r.normal();
-      const double n_body_extra = r.normal();
-      const double n_shadow = r.normal();
-      const double n_gap = r.normal();
-
-      const KinState st = traj.at(t_us);
-      const Eigen::Vector3d lever(tag.lever_body_m[0], tag.lever_body_m[1], tag.lever_body_m[2]);
-      const Eigen::Vector3d tag_nav = st.pos_nav_m + st.R_nav_body * lever;
-      const Eigen::Vector3d anchor_nav(anchor.pos_nav_m[0], anchor.pos_nav_m[1], anchor.pos_nav_m[2]);
-      const double true_range = (anchor_nav - tag_nav).norm();
-
-      bool box_blocked = false;
-      for (const Box& b : nl.boxes) box_blocked = box_blocked || segment_hits_box(tag_nav, anchor_nav, b);
-      const bool body_blocked =
-          nl.body_block && body_blocks(st.R_nav_body.transpose() * (anchor_nav - tag_nav), nl.body_cone_deg);
-
-      // Episode biases: drawn when a blockage starts (seed 000 §2.1 cites a
-      // positive NLOS bias; heavy tail by a log-normal law).
-      Episode& be = box_ep[j * n_anchors + a];
-      Episode& de = body_ep[j * n_anchors + a];
-      if (box_blocked && !be.blocked) {
-        Rng re(mix_seed(opt.seed, kStreamEpisode, 2 * slot_id));
-        be.bias_m = re.lognormal_mean(nl.box_bias_mean_m, nl.bias_shape);
+  const auto blocked = [&](size_t a, uint64_t t_us) {
+    const double t_s = static_cast<double>(t_us) * 1e-6;
+    for (const Blockage& b : out.blockages) {
+      if (t_s < b.start_s || t_s >= b.end_s) continue;
+      for (uint16_t id : b.anchor_ids) {
+        if (id == sc.anchors[a].id) return true;
       }
-      if (body_blocked && !de.blocked) {
-        Rng re(mix_seed(opt.seed, kStreamEpisode, 2 * slot_id + 1));
-        de.bias_m = re.lognormal_mean(nl.body_bias_mean_m, nl.bias_shape);
-      }
-      be.blocked = box_blocked;
-      de.blocked = body_blocked;
-
-      if (in_outage(sc, t_us) || u_loss < packet_loss) continue;
-
-      const double js = nl.bias_jitter_shape;
-      const double jitter_norm = -0.5 * js * js;  // keeps E[jitter] = 1
-      double bias = 0.0;
-      RangeCause cause = RangeCause::kLos;
-      if (noisy && box_blocked) {
-        bias += be.bias_m * std::exp(js * n_box_jitter + jitter_norm) + nl.box_extra_sigma_m * n_box_extra;
-        cause = RangeCause::kBox;
-      }
-      if (noisy && body_blocked) {
-        bias += de.bias_m * std::exp(js * n_body_jitter + jitter_norm) + nl.body_extra_sigma_m * n_body_extra;
-        if (cause == RangeCause::kLos) cause = RangeCause::kBody;
-      }
-      const bool geometric_nlos = cause != RangeCause::kLos;
-      if (u_outlier < outlier_prob) {
-        double mag = std::exp(ln_out_min + u_out_mag * (ln_out_max - ln_out_min));
-        if (u_out_sign >= nl.outlier_positive_prob) mag = -std::min(mag, 0.5 * true_range);
-        bias += mag;
-        cause = RangeCause::kOutlier;
-      }
-      const double range = std::max(0.0, true_range + sigma * n_range + bias);
-
-      dataset::UwbRow row;
-      row.range.t_us = t_us;
-      row.range.anchor_id = anchor.id;
-      row.range.tag_id = tag.id;
-      row.range.range_m = static_cast<float>(range);
-      row.nlos_label = cause == RangeCause::kLos ? 0 : 1;
-      if (sc.uwb.channel_diagnostics) {
-        // Log-distance path loss; blocked paths lose nlos_extra_loss_db and show a
-        // larger total-minus-first-path gap (DW1000 diagnostics, folded normal).
-        const bool weak_first_path = geometric_nlos || cause == RangeCause::kOutlier;
-        double rx = ch.rx_power_1m_dbm - 10.0 * ch.path_loss_exponent * std::log10(std::max(true_range, 0.3)) +
-                    ch.shadowing_sigma_db * n_shadow;
-        if (geometric_nlos) rx -= ch.nlos_extra_loss_db;
-        const double gap = weak_first_path ? std::fabs(ch.nlos_gap_mean_db + ch.nlos_gap_sigma_db * n_gap)
-                                           : std::fabs(ch.los_gap_mean_db + ch.los_gap_sigma_db * n_gap);
-        row.range.rx_power_dbm = static_cast<float>(rx);
-        row.range.fp_power_dbm = static_cast<float>(rx - gap);
-      }
-      out.rec.uwb.push_back(row);
-      out.range_truth.push_back(RangeTruth{true_range, bias, cause});
     }
-  }
+    return false;
+  };
+
+  uint64_t state_t_us = UINT64_MAX;
+  KinState state;
+  for_each_slot(sc, dur_us, [&](uint64_t t_us, size_t j, size_t a, uint64_t slot_id) {
+    const AnchorDef& anchor = sc.anchors[a];
+    const TagDef& tag = sc.tags[j];
+    const size_t pair = j * n_anchors + a;
+
+    // Every slot draws the same numbers in the same order, used or not.
+    Rng r(mix_seed(opt.seed, kStreamSlot, slot_id));
+    const double u_loss = r.uniform();
+    const double n_range = r.normal();
+    const double u_outlier = r.uniform();
+    const double u_out_mag = r.uniform();
+    const double u_out_sign = r.uniform();
+    const double n_box_jitter = r.normal();
+    const double n_box_extra = r.normal();
+    const double n_body_jitter = r.normal();
+    const double n_body_extra = r.normal();
+    const double n_shadow = r.normal();
+    const double n_gap = r.normal();
+
+    // Frames range every pair at one instant: evaluate the truth once per instant.
+    if (t_us != state_t_us) {
+      state = traj.at(t_us);
+      state_t_us = t_us;
+    }
+    const KinState& st = state;
+    const Eigen::Vector3d lever(tag.lever_body_m[0], tag.lever_body_m[1], tag.lever_body_m[2]);
+    const Eigen::Vector3d tag_nav = st.pos_nav_m + st.R_nav_body * lever;
+    const Eigen::Vector3d anchor_nav(anchor.pos_nav_m[0], anchor.pos_nav_m[1], anchor.pos_nav_m[2]);
+    const double true_range = (anchor_nav - tag_nav).norm();
+
+    bool box_blocked = false;
+    for (const Box& b : nl.boxes) box_blocked = box_blocked || segment_hits_box(tag_nav, anchor_nav, b);
+    const bool body_blocked =
+        nl.body_block && body_blocks(st.R_nav_body.transpose() * (anchor_nav - tag_nav), nl.body_cone_deg);
+
+    // Episode biases: drawn when a blockage starts (seed 000 §2.1 cites a
+    // positive NLOS bias; heavy tail by a log-normal law).
+    Episode& be = box_ep[pair];
+    Episode& de = body_ep[pair];
+    if (box_blocked && !be.blocked) {
+      Rng re(mix_seed(opt.seed, kStreamEpisode, 2 * slot_id));
+      be.bias_m = re.lognormal_mean(nl.box_bias_mean_m, nl.bias_shape);
+    }
+    if (body_blocked && !de.blocked) {
+      Rng re(mix_seed(opt.seed, kStreamEpisode, 2 * slot_id + 1));
+      de.bias_m = re.lognormal_mean(nl.body_bias_mean_m, nl.bias_shape);
+    }
+    be.blocked = box_blocked;
+    de.blocked = body_blocked;
+
+    // Random (renewal) NLOS episode covering t_us, if any.
+    const EpisodeInterval* episode = nullptr;
+    std::vector<EpisodeInterval>& eps = episodes[pair];
+    size_t& cur = episode_cursor[pair];
+    while (cur < eps.size() && eps[cur].end_us <= t_us) ++cur;
+    if (cur < eps.size() && eps[cur].start_us <= t_us) episode = &eps[cur];
+
+    const bool burst_lost = burst_loss > 0.0 && bursts[pair].step(burst_loss, sc.uwb.burst_mean_len);
+    if (in_outage(sc, t_us) || blocked(a, t_us) || u_loss < packet_loss || burst_lost) return;
+
+    const double js = nl.bias_jitter_shape;
+    const double jitter_norm = -0.5 * js * js;  // keeps E[jitter] = 1
+    double bias = 0.0;
+    RangeCause cause = RangeCause::kLos;
+    if (noisy && box_blocked) {
+      bias += be.bias_m * std::exp(js * n_box_jitter + jitter_norm) + nl.box_extra_sigma_m * n_box_extra;
+      cause = RangeCause::kBox;
+    }
+    if (noisy && body_blocked) {
+      bias += de.bias_m * std::exp(js * n_body_jitter + jitter_norm) + nl.body_extra_sigma_m * n_body_extra;
+      if (cause == RangeCause::kLos) cause = RangeCause::kBody;
+    }
+    if (episode != nullptr) {
+      Rng r2(mix_seed(opt.seed, kStreamSlot2, slot_id));
+      const double n_ep_jitter = r2.normal();
+      const double n_ep_extra = r2.normal();
+      bias += episode->bias_m * std::exp(js * n_ep_jitter + jitter_norm) + nl.episode_extra_sigma_m * n_ep_extra;
+      if (cause == RangeCause::kLos) cause = RangeCause::kEpisode;
+    }
+    const bool geometric_nlos = cause != RangeCause::kLos;
+    if (u_outlier < outlier_prob) {
+      double mag = std::exp(ln_out_min + u_out_mag * (ln_out_max - ln_out_min));
+      if (u_out_sign >= nl.outlier_positive_prob) mag = -std::min(mag, 0.5 * true_range);
+      bias += mag;
+      cause = RangeCause::kOutlier;
+    }
+    const PairError& pe = out.pair_errors[pair];
+    const double systematic = pe.offset_m + pe.scale * true_range;
+    const double range = quantise(std::max(0.0, true_range + systematic + sigma * n_range + bias), lsb);
+
+    dataset::UwbRow row;
+    row.range.t_us = t_us;
+    row.range.anchor_id = anchor.id;
+    row.range.tag_id = tag.id;
+    row.range.range_m = static_cast<float>(range);
+    row.nlos_label = cause == RangeCause::kLos ? 0 : 1;
+    if (sc.uwb.channel_diagnostics) {
+      // Log-distance path loss; blocked paths lose nlos_extra_loss_db and show a
+      // larger total-minus-first-path gap (DW1000 diagnostics, folded normal).
+      const bool weak_first_path = geometric_nlos || cause == RangeCause::kOutlier;
+      double rx = ch.rx_power_1m_dbm - 10.0 * ch.path_loss_exponent * std::log10(std::max(true_range, 0.3)) +
+                  ch.shadowing_sigma_db * n_shadow;
+      if (geometric_nlos) rx -= ch.nlos_extra_loss_db;
+      const double gap = weak_first_path ? std::fabs(ch.nlos_gap_mean_db + ch.nlos_gap_sigma_db * n_gap)
+                                         : std::fabs(ch.los_gap_mean_db + ch.los_gap_sigma_db * n_gap);
+      row.range.rx_power_dbm = static_cast<float>(rx);
+      row.range.fp_power_dbm = static_cast<float>(rx - gap);
+    }
+    out.rec.uwb.push_back(row);
+    out.range_truth.push_back(RangeTruth{true_range, bias, systematic, cause});
+  });
 }
 
 // Seed 000 §2.1: per (tag, anchor), a random `protocol_fraction` of the ranges
@@ -356,9 +669,13 @@ Status simulate_scenario(const Scenario& scenario, const SimOptions& options, Si
   if (!ok(v)) return v;
   out = SimOutput{};
   out.scenario = scenario;
-  const Status site = fill_site(scenario, out.rec.site, error);
+  out.anchors_surveyed = survey_anchors(scenario, options);
+  const Status site = fill_site(scenario, out.anchors_surveyed, out.rec.site, error);
   if (!ok(site)) return site;
+  out.pair_errors = draw_pair_errors(scenario, options);
+  out.blockages = draw_blockages(scenario, options);
   fill_meta(scenario, options, out.rec);
+  fill_meta_errors(scenario, options, out, out.rec);
 
   const uint64_t dur_us = static_cast<uint64_t>(std::llround(scenario.duration_s * 1e6));
   Trajectory traj;

@@ -25,7 +25,8 @@ std::vector<std::string> preset_names();
 struct SimOptions {
   uint64_t seed = 0;
   bool ideal_imu = false;  // no bias, noise, quantisation: IMU = exact truth derivatives
-  bool ideal_uwb = false;  // no noise, NLOS bias, outliers or packet loss (outages still apply)
+  bool ideal_uwb = false;  // no noise, NLOS bias, outliers, packet or burst loss, offsets, scale error,
+                           // quantisation or survey error (outages and blockage schedules still apply)
 };
 
 // Why a range deviates from the true distance (evaluation only).
@@ -35,13 +36,30 @@ enum class RangeCause : uint8_t {
   kBody = 2,      // blocked by the vehicle body only
   kOutlier = 3,   // gross outlier (possibly on top of a blocked path)
   kProtocol = 4,  // seed 000 §2.1 protocol: added error, labelled NLOS
+  kEpisode = 5,   // random NLOS episode (renewal process, not geometry)
 };
 
 // Per-range ground truth, parallel to Recording::uwb.
 struct RangeTruth {
   double true_range_m = 0.0;  // tag antenna (truth pos + R lever) to anchor [m]
   double bias_m = 0.0;        // NLOS / outlier / protocol error added on top of the LOS noise [m]
+  double offset_m = 0.0;      // systematic part: anchor + tag + pair offset + scale error * true range [m]
   RangeCause cause = RangeCause::kLos;
+};
+
+// One entry of the anchor blockage schedule: the anchors are silent in [start_s, end_s).
+struct Blockage {
+  double start_s = 0.0;
+  double end_s = 0.0;
+  std::vector<uint16_t> anchor_ids;
+};
+
+// Constant ranging errors of one anchor/tag pair for the whole run.
+struct PairError {
+  uint16_t anchor_id = 0;
+  uint8_t tag_id = 0;
+  double offset_m = 0.0;  // anchor + tag + pair offset [m]
+  double scale = 0.0;     // measured = (1 + scale) true + ... [-]
 };
 
 // Full truth at every IMU instant, parallel to Recording::truth.
@@ -59,7 +77,10 @@ struct SimOutput {
   dataset::Recording rec;
   std::vector<TruthState> truth;         // same instants as rec.truth / rec.imu
   std::vector<RangeTruth> range_truth;   // same order as rec.uwb
-  Scenario scenario;                     // what was simulated
+  Scenario scenario;                     // what was simulated (anchors: true positions)
+  std::vector<AnchorDef> anchors_surveyed;  // what anchors.csv carries (true + survey error)
+  std::vector<PairError> pair_errors;    // per (tag, anchor), tag-major
+  std::vector<Blockage> blockages;       // anchor blockage schedule
 };
 
 // Simulates a parsed scenario.

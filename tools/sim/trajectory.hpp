@@ -1,6 +1,7 @@
-// Truth trajectory of the simulated ground vehicle: smooth analytic speed,
-// heading and height profiles from the scenario route, suspension roll/pitch,
-// and the exact specific force and body rates they imply.
+// Truth trajectory of the simulated platform: for a ground vehicle smooth
+// analytic speed, heading and height profiles with suspension roll/pitch; for
+// a multicopter a smooth 3-D position profile with the tilt its acceleration
+// needs and an independent yaw; and the exact specific force and body rates.
 #pragma once
 
 #include <cstdint>
@@ -37,6 +38,28 @@ class Trajectory {
   KinState at(uint64_t t_us) const;
 
  private:
+  // Multicopter: one rest-to-rest position segment (hold, goto or eight).
+  struct AirSegment {
+    double t0_s = 0.0;
+    double dur_s = 1.0;
+    ManeuverKind kind = ManeuverKind::kHold;
+    Eigen::Vector3d p0 = Eigen::Vector3d::Zero();  // position at the start [m]
+    Eigen::Vector3d dp = Eigen::Vector3d::Zero();  // goto displacement [m]
+    double eight_x_m = 0.0, eight_y_m = 0.0, eight_rot_rad = 0.0, eight_loops = 0.0;
+  };
+  struct YawSegment {
+    double t0_s = 0.0;
+    double dur_s = 1.0;
+    double yaw0_rad = 0.0, dyaw_rad = 0.0;
+  };
+  void build_air(const Scenario& s, double end_s);
+  // Position, velocity, acceleration of the multicopter at t_s.
+  void air_motion(double t_s, Eigen::Vector3d& p, Eigen::Vector3d& v, Eigen::Vector3d& a) const;
+  double air_yaw(double t_s, double* yaw_rate) const;
+  // Body -> nav rotation: body z along the thrust (a + g z_nav), heading yaw.
+  Eigen::Matrix3d air_attitude(double t_s) const;
+  KinState at_air(uint64_t t_us) const;
+
   struct Segment {
     double t0_s = 0.0;
     double dur_s = 1.0;
@@ -57,6 +80,9 @@ class Trajectory {
   static constexpr uint64_t kGridUs = 10000;  // stored position grid [us]
   static constexpr uint64_t kStepUs = 2000;   // quadrature sub-step [us]
 
+  RouteKind kind_ = RouteKind::kVehicle;
+  std::vector<AirSegment> air_segs_;
+  std::vector<YawSegment> yaw_segs_;
   std::vector<Segment> segs_;
   std::vector<Eigen::Vector2d> grid_xy_;  // horizontal position at k * kGridUs
   double roll_gain_rad_per_mps2_ = 0.0;

@@ -1,0 +1,191 @@
+// Scenario family: every cell draws valid, reproducible drives inside its
+// ranges (anchors, schedules, trolley, multicopter, outages, blockages).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <set>
+#include <string>
+
+#include "tools/sim/family.hpp"
+
+namespace uwbnav::sim {
+namespace {
+
+SimOutput family(const std::string& cell, uint64_t seed, bool fast = true) {
+  FamilyOptions opt;
+  opt.fast = fast;
+  SimOutput out;
+  std::string err;
+  EXPECT_EQ(simulate_family(cell, seed, opt, out, &err), Status::kOk) << cell << ":" << seed << " " << err;
+  return out;
+}
+
+TEST(SimFamily, CellListHasTheRequiredCells) {
+  std::set<std::string> names;
+  for (const FamilyCell& c : family_cells()) {
+    names.insert(c.name);
+    EXPECT_FALSE(c.description.empty()) << c.name;
+  }
+  for (const char* n : {"ground_los", "ground_nlos", "ground_hard", "ground_survey15", "ground_blocked",
+                        "ground_sparse", "air_indoor", "air_sparse", "trolley3", "outage"}) {
+    EXPECT_EQ(names.count(n), 1U) << n;
+  }
+}
+
+TEST(SimFamily, EveryCellDrawsValidScenariosWithinItsAnchorArea) {
+  for (const FamilyCell& c : family_cells()) {
+    for (uint64_t seed : {1ULL, 2ULL, 1000ULL}) {
+      Scenario sc;
+      std::string err;
+      ASSERT_EQ(draw_family_scenario(c.name, seed, FamilyOptions{}, sc, &err), Status::kOk) << c.name << " " << err;
+      EXPECT_GE(sc.anchors.size(), 4U) << c.name;
+      EXPECT_LE(sc.anchors.size(), 8U) << c.name;
+      EXPECT_GE(sc.duration_s, 60.0) << c.name;
+      const SimOutput out = family(c.name, seed);
+      ASSERT_FALSE(out.rec.uwb.empty()) << c.name;
+      EXPECT_EQ(out.rec.meta.at("sim_family"), c.name + ":" + std::to_string(seed));
+      // The route stays within a turning circle of the anchors' bounding box.
+      double lo[2] = {1e9, 1e9};
+      double hi[2] = {-1e9, -1e9};
+      for (const AnchorDef& a : out.scenario.anchors) {
+        for (int i = 0; i < 2; ++i) {
+          lo[i] = std::min(lo[i], a.pos_nav_m[i]);
+          hi[i] = std::max(hi[i], a.pos_nav_m[i]);
+        }
+      }
+      for (const TruthState& t : out.truth) {
+        for (int i = 0; i < 2; ++i) {
+          ASSERT_GT(t.pos_nav_m[i], lo[i] - 12.0) << c.name << ":" << seed;
+          ASSERT_LT(t.pos_nav_m[i], hi[i] + 12.0) << c.name << ":" << seed;
+        }
+      }
+      // Parked (or on the ground) for the first 10 s.
+      for (size_t k = 0; k < 1000 && k < out.truth.size(); ++k) {
+        ASSERT_EQ(out.truth[k].vel_nav_mps[0], 0.0) << c.name;
+        ASSERT_EQ(out.truth[k].vel_nav_mps[1], 0.0) << c.name;
+      }
+    }
+  }
+}
+
+TEST(SimFamily, SameCellAndSeedGiveTheSameDriveAndOtherSeedsOrCellsDiffer) {
+  const SimOutput a = family("ground_nlos", 7);
+  const SimOutput b = family("ground_nlos", 7);
+  ASSERT_EQ(a.rec.uwb.size(), b.rec.uwb.size());
+  for (size_t i = 0; i < a.rec.uwb.size(); ++i) {
+    ASSERT_EQ(std::memcmp(&a.rec.uwb[i].range.range_m, &b.rec.uwb[i].range.range_m, sizeof(float)), 0);
+  }
+  EXPECT_EQ(a.rec.meta, b.rec.meta);
+  const SimOutput c = family("ground_nlos", 8);
+  const SimOutput d = family("ground_hard", 7);
+  EXPECT_NE(a.scenario.description, c.scenario.description);
+  EXPECT_NE(a.scenario.description, d.scenario.description);
+}
+
+TEST(SimFamily, TrolleyHasThreeTagsEightAnchorsAt104FramesQuantisedAndNoImu) {
+  const SimOutput out = family("trolley3", 3);
+  const Scenario& sc = out.scenario;
+  ASSERT_EQ(sc.tags.size(), 3U);
+  ASSERT_EQ(sc.anchors.size(), 8U);
+  for (const AnchorDef& a : sc.anchors) EXPECT_NEAR(a.pos_nav_m[2], 1.04, 1e-6);
+  for (size_t i = 0; i < 3; ++i) {
+    for (size_t j = i + 1; j < 3; ++j) {
+      const double d = std::hypot(sc.tags[i].lever_body_m[0] - sc.tags[j].lever_body_m[0],
+                                  sc.tags[i].lever_body_m[1] - sc.tags[j].lever_body_m[1]);
+      EXPECT_NEAR(d, 0.3, 0.02);
+    }
+  }
+  EXPECT_FALSE(out.rec.site.has_imu);
+  EXPECT_TRUE(out.rec.imu.empty());
+  EXPECT_EQ(sc.uwb.schedule, UwbSchedule::kFrame);
+  EXPECT_EQ(sc.uwb.rate_hz, 100.0);
+  ASSERT_EQ(out.pair_errors.size(), 24U);
+  for (const PairError& e : out.pair_errors) {
+    EXPECT_GE(std::fabs(e.offset_m), 0.1);
+    EXPECT_LE(std::fabs(e.offset_m), 0.3);
+  }
+  for (const auto& row : out.rec.uwb) {
+    const double steps = static_cast<double>(row.range.range_m) / 0.01;
+    EXPECT_NEAR(steps, std::round(steps), 1e-3);
+  }
+}
+
+TEST(SimFamily, AirCellsFlyMulticoptersFromAnUnknownHeadingAtTheirRates) {
+  std::set<long> headings;
+  for (uint64_t seed = 1; seed <= 4; ++seed) {
+    const SimOutput out = family("air_indoor", seed);
+    EXPECT_EQ(out.rec.site.platform, Platform::kAir);
+    EXPECT_EQ(out.scenario.route.kind, RouteKind::kMulticopter);
+    EXPECT_EQ(out.scenario.anchors.size(), 6U);
+    for (const AnchorDef& a : out.scenario.anchors) {
+      EXPECT_GE(a.pos_nav_m[2], 0.4 - 1e-6);
+      EXPECT_LE(a.pos_nav_m[2], 2.9 + 1e-6);
+    }
+    headings.insert(std::lround(out.scenario.route.start_heading_deg));
+    double top = 0.0;
+    for (const TruthState& t : out.truth) top = std::max(top, t.pos_nav_m[2]);
+    EXPECT_GE(top, 0.8);
+    EXPECT_LE(top, 2.6);
+    const double per_anchor_hz = static_cast<double>(out.rec.uwb.size()) / out.scenario.duration_s / 6.0;
+    EXPECT_GT(per_anchor_hz, 10.0);
+    EXPECT_LT(per_anchor_hz, 45.0);
+  }
+  EXPECT_GE(headings.size(), 3U);
+  const SimOutput sparse = family("air_sparse", 1, false);
+  const double total_hz = static_cast<double>(sparse.rec.uwb.size()) / sparse.scenario.duration_s;
+  EXPECT_GT(total_hz, 0.5);
+  EXPECT_LT(total_hz, 1.5);
+}
+
+TEST(SimFamily, OutageCellPlacesOutagesOfTheIssue15LengthsAfterInitialisation) {
+  size_t total = 0;
+  for (uint64_t seed = 1; seed <= 6; ++seed) {
+    Scenario sc;
+    std::string err;
+    ASSERT_EQ(draw_family_scenario("outage", seed, FamilyOptions{}, sc, &err), Status::kOk) << err;
+    for (const Outage& o : sc.uwb.outages) {
+      const double len = o.end_s - o.start_s;
+      const bool issue15_length = std::fabs(len - 5.0) < 1e-9 || std::fabs(len - 10.0) < 1e-9 ||
+                                  std::fabs(len - 15.0) < 1e-9 || std::fabs(len - 30.0) < 1e-9;
+      EXPECT_TRUE(issue15_length) << len;
+      EXPECT_GE(o.start_s, 40.0);
+      EXPECT_LE(o.end_s, sc.duration_s);
+      ++total;
+    }
+  }
+  EXPECT_GE(total, 6U);
+}
+
+TEST(SimFamily, BlockedCellSilencesTwoOfFourAnchorsAtATimeOnALongDrive) {
+  Scenario sc;
+  std::string err;
+  ASSERT_EQ(draw_family_scenario("ground_blocked", 1000, FamilyOptions{}, sc, &err), Status::kOk) << err;
+  EXPECT_EQ(sc.anchors.size(), 4U);
+  EXPECT_EQ(sc.uwb.block_anchors, 2U);
+  EXPECT_GE(sc.duration_s, 600.0);
+  FamilyOptions fast;
+  fast.fast = true;
+  ASSERT_EQ(draw_family_scenario("ground_blocked", 1000, fast, sc, &err), Status::kOk) << err;
+  EXPECT_LE(sc.duration_s, 150.0);
+}
+
+TEST(SimFamily, FamilySpecParsesCellAndSeed) {
+  std::string cell;
+  uint64_t seed = 0;
+  EXPECT_TRUE(parse_family_spec("family:ground_los:1000", cell, seed));
+  EXPECT_EQ(cell, "ground_los");
+  EXPECT_EQ(seed, 1000U);
+  EXPECT_FALSE(parse_family_spec("family:ground_los", cell, seed));
+  EXPECT_FALSE(parse_family_spec("family::3", cell, seed));
+  EXPECT_FALSE(parse_family_spec("family:x:-3", cell, seed));
+  EXPECT_FALSE(parse_family_spec("parking_nlos", cell, seed));
+  Scenario sc;
+  std::string err;
+  EXPECT_EQ(draw_family_scenario("nope", 1, FamilyOptions{}, sc, &err), Status::kNotFound);
+  EXPECT_NE(err.find("unknown family cell"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace uwbnav::sim

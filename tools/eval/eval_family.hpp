@@ -1,0 +1,99 @@
+// `uwbnav eval family`: the firmware over the randomized scenario family (or
+// the real recordings), accuracy together with its honesty per family cell
+// (docs/evaluation.md "Scenario family").
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "estimator/navigator.hpp"
+#include "tools/dataset/recording.hpp"
+#include "tools/eval/eval_nlos.hpp"
+#include "tools/eval/replay.hpp"
+
+namespace uwbnav::eval {
+
+// Recoveries of the estimator by kind. One place that reads them from the
+// diagnostics, so new kinds of recovery are counted everywhere at once.
+struct RecoveryCounts {
+  uint64_t resets = 0;   // covariance/state resets (non-finite, exploding)
+  uint64_t reinits = 0;  // re-initialisations after divergence
+};
+RecoveryCounts count_reinits(const NavDiagnostics& diag);
+
+// Figures of one drive, as sums so that cells pool them exactly.
+struct DriveMetrics {
+  std::string name;             // family:CELL:SEED or the recording's name
+  bool ok = false;              // replay ran
+  std::string error;
+  double hours = 0.0;           // span of the outputs [h]
+  // Accuracy (good epochs with truth; good = status valid/degraded with a finite position).
+  size_t err_n = 0;
+  double err_sq_sum = 0.0;      // sum of squared horizontal errors [m^2]
+  double rmse_h_m = 0.0;        // NaN without a good epoch
+  double max_h_m = 0.0;
+  double p95_h_m = 0.0;
+  // Availability.
+  size_t epochs = 0;            // output epochs from the first good one on
+  size_t good = 0;              // of which good
+  double longest_gap_s = 0.0;   // longest stretch without a good epoch after the first [s]
+  double ttfe_s = 0.0;          // first good epoch minus first range [s]; NaN when none
+  // Honesty (good epochs with truth and a finite claimed sigma).
+  size_t hon_n = 0;
+  size_t in2s_h = 0, in2s_x = 0, in2s_y = 0;
+  size_t nees_n = 0, nees_in = 0;  // 2-D NEES; in = NEES <= 5.991
+  double nees_sum = 0.0;
+  size_t nis_n = 0, nis_in = 0;    // NIS of used ranges; in = NIS <= 3.841
+  double nis_sum = 0.0;
+  RecoveryCounts recoveries;
+  // Fallback: good epochs with truth whose mode is not the inertial filter.
+  size_t fallback_n = 0;
+  double fallback_sq_sum = 0.0;
+  uint64_t ranges_used = 0, ranges_rejected = 0;
+  Confusion nlos;               // decisions vs labels (labels never reach the firmware)
+  double wall_s = 0.0;          // simulation + replay wall time [s]
+};
+
+// Evaluates one replay against the recording's truth and labels.
+DriveMetrics drive_metrics(const dataset::Recording& rec, const ReplayResult& res);
+
+// Pooled figures of a group of drives (a cell, the real set, or all).
+struct CellSummary {
+  std::string name;
+  size_t drives = 0, failed = 0;
+  double hours = 0.0;
+  double rmse_med = 0.0, rmse_worst = 0.0;
+  double max_med = 0.0, max_worst = 0.0;
+  double p95_med = 0.0;
+  double availability = 0.0;
+  double gap_max_s = 0.0;
+  double ttfe_med_s = 0.0, ttfe_max_s = 0.0;
+  double in2s_h = 0.0, in2s_x = 0.0, in2s_y = 0.0;
+  double nees_mean = 0.0, nees_in = 0.0;
+  double nis_mean = 0.0, nis_in = 0.0;
+  double resets_per_h = 0.0, reinits_per_h = 0.0;
+  double fallback_share = 0.0, fallback_rmse = 0.0;
+  double fused_share = 0.0;
+  double nlos_precision = 0.0, nlos_recall = 0.0;
+};
+CellSummary summarise_cell(const std::string& name, const std::vector<DriveMetrics>& drives);
+
+// Seeds of `--seeds`: "tuning" (1-99), "reporting" (1000-1999), "N-M" or "N".
+bool parse_seed_set(const std::string& text, uint64_t& first, uint64_t& last);
+
+// Real recordings: <repo>/data first, then <repo>/../shared/data.
+std::string find_real_data_dir();
+
+// Format v1 recordings (directories with uwb.csv) under `root`, two levels deep, sorted.
+std::vector<std::string> find_recordings(const std::string& root);
+
+// Prints the two tables (accuracy/availability, honesty/robustness), Markdown or aligned text.
+void print_family_tables(std::FILE* f, const std::vector<CellSummary>& rows, bool markdown);
+
+// CLI: uwbnav eval family [--cells a,b] [--seeds tuning|reporting|N-M] [--drives-per-cell K]
+//      [--param name=value]... [--fast] [--markdown] [--verbose] [--jobs N] [--real] [--data DIR]
+int run_eval_family(int argc, char** argv);
+
+}  // namespace uwbnav::eval
