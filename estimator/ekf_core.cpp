@@ -7,15 +7,26 @@
 namespace uwbnav {
 namespace {
 
-// Variance floors and ceilings per block (1-sigma^2): below a floor the filter
-// would stop listening to measurements; above a ceiling linearisation is void.
+// Variance floors and ceilings per 3-block of the core (1-sigma^2): below a
+// floor the filter would stop listening to measurements; above a ceiling
+// linearisation is void. Then the range errors: scale, offsets.
 constexpr Real kFloorVar[5] = {Real(1e-6), Real(1e-6), Real(1e-9), Real(1e-10), Real(1e-12)};
 constexpr Real kCeilVar[5] = {Real(1e6), Real(1e4), Real(4.0), Real(4.0), Real(0.25)};
+constexpr Real kFloorVarScale = Real(1e-10);  // (1e-5)^2
+constexpr Real kCeilVarScale = Real(1e-4);    // (1 %)^2
+constexpr Real kFloorVarOffset = Real(1e-8);  // (0.1 mm)^2 [m^2]
+constexpr Real kCeilVarOffset = Real(4.0);    // (2 m)^2 [m^2]
+// Range errors beyond these are not an offset any more: the state exploded.
+constexpr Real kMaxScale = Real(0.05);
+constexpr Real kMaxOffset_m = Real(20);
 // The state is declared exploded beyond these magnitudes.
 constexpr Real kMaxPos_m = Real(1e6);
 constexpr Real kMaxVel_mps = Real(1e3);
 constexpr Real kMaxBiasAccel_mps2 = Real(20);
 constexpr Real kMaxBiasGyro_radps = Real(2);
+
+// Predictions between full symmetric/finite checks of the covariance.
+constexpr uint32_t kFullCheckEvery = 10;
 
 constexpr int P = ErrIdx::kPos;
 constexpr int V = ErrIdx::kVel;
@@ -101,8 +112,9 @@ void EkfCore::predict_imu(const Vec3& accel_mean_body_mps2, const Vec3& gyro_mea
   }
 }
 
-void EkfCore::predict_cv(Real dt_s, Real accel_psd) {
+void EkfCore::predict_cv(Real dt_s, Real accel_psd, Real yaw_psd) {
   x_.pos_nav_m += x_.vel_nav_mps * dt_s;
+  p_(A + 2, A + 2) += yaw_psd * yaw_psd * dt_s;
   p_.middleRows<3>(P) += dt_s * p_.middleRows<3>(V);
   p_.middleCols<3>(P) += dt_s * p_.middleCols<3>(V);
   const Real qa = accel_psd * accel_psd;
@@ -115,10 +127,13 @@ void EkfCore::predict_cv(Real dt_s, Real accel_psd) {
   }
 }
 
-Real EkfCore::innovation_variance(const ErrRow& h, Real r_var) const { return (h * p_ * h.transpose())(0, 0) + r_var; }
+Real EkfCore::innovation_variance(const ErrRow& h, Real r_var) const {
+  return h.dot(p_.lazyProduct(h.transpose())) + r_var;
+}
 
 Real EkfCore::prepare(const ErrRow& h) {
-  u_.noalias() = p_ * h.transpose();
+  // Coefficient-wise product: fixed size, no blocked GEMV path (no temporaries).
+  u_.noalias() = p_.lazyProduct(h.transpose());
   hph_ = h.dot(u_);
   return hph_;
 }
@@ -128,17 +143,26 @@ UpdateResult EkfCore::update(const ScalarObs& obs) {
   return update_prepared(obs.innovation, obs.r_var);
 }
 
-UpdateResult EkfCore::update_prepared(Real innovation, Real r_var) {
+UpdateResult EkfCore::update_prepared(Real innovation, Real r_var, bool consider_range_errors) {
   UpdateResult res;
   const Real s = hph_ + r_var;
   res.innovation_var = s;
   if (!(s > Real(0)) || !std::isfinite(s) || !std::isfinite(innovation)) return res;
   const Real inv_s = Real(1) / s;
-  for (int i = 0; i < kN; ++i) {
+  const int n_est = consider_range_errors ? ErrIdx::kCore : kN;
+  for (int i = 0; i < n_est; ++i) {
     if (p_(i, i) - u_(i) * u_(i) * inv_s < Real(0)) return res;  // ArduPilot-style refusal
   }
   // Joseph form with the optimal scalar gain K = u / S (see header).
   p_.noalias() -= (u_ * inv_s) * u_.transpose();
+  if (consider_range_errors) {
+    // Schmidt-Kalman: K is zero on the consider states. With a scalar update the
+    // Joseph form (I-KH)P(I-KH)^T + K R K^T then differs from the optimal one
+    // only in the consider-consider block, which keeps its prior value.
+    p_.bottomRightCorner<ErrIdx::kRange, ErrIdx::kRange>().noalias() +=
+        (u_.tail<ErrIdx::kRange>() * inv_s) * u_.tail<ErrIdx::kRange>().transpose();
+    u_.tail<ErrIdx::kRange>().setZero();
+  }
   inject(u_ * (innovation * inv_s));
   res.applied = true;
   return res;
@@ -150,6 +174,7 @@ void EkfCore::inject(const ErrVec& dx) {
   x_.q_nav_body = quat_normalised(quat_mul(quat_exp(dx.segment<3>(A)), x_.q_nav_body));
   x_.ba_body_mps2 += dx.segment<3>(BA);
   x_.bg_body_radps += dx.segment<3>(BG);
+  x_.range_err += dx.tail<ErrIdx::kRange>();
   refresh_dcm();
 }
 
@@ -162,18 +187,30 @@ bool EkfCore::sanitise(bool symmetrise) {
     return false;
   }
   if (x_.pos_nav_m.cwiseAbs().maxCoeff() > kMaxPos_m || x_.vel_nav_mps.norm() > kMaxVel_mps ||
-      x_.ba_body_mps2.norm() > kMaxBiasAccel_mps2 || x_.bg_body_radps.norm() > kMaxBiasGyro_radps) {
+      x_.ba_body_mps2.norm() > kMaxBiasAccel_mps2 || x_.bg_body_radps.norm() > kMaxBiasGyro_radps ||
+      !x_.range_err.allFinite() || std::fabs(x_.range_scale()) > kMaxScale ||
+      x_.range_err.tail<ErrIdx::kRange - 1>().cwiseAbs().maxCoeff() > kMaxOffset_m) {
     return false;
   }
   for (int i = 0; i < kN; ++i) {
-    const int blk = i / 3;
+    Real floor_var, ceil_var;
+    if (i < ErrIdx::kCore) {
+      floor_var = kFloorVar[i / 3];
+      ceil_var = kCeilVar[i / 3];
+    } else if (i == ErrIdx::kScale) {
+      floor_var = kFloorVarScale;
+      ceil_var = kCeilVarScale;
+    } else {
+      floor_var = kFloorVarOffset;
+      ceil_var = kCeilVarOffset;
+    }
     const Real d = p_(i, i);
-    if (d > kCeilVar[blk]) {
-      const Real scale = std::sqrt(kCeilVar[blk] / d);
+    if (d > ceil_var) {
+      const Real scale = std::sqrt(ceil_var / d);
       p_.row(i) *= scale;
       p_.col(i) *= scale;
-    } else if (d < kFloorVar[blk]) {
-      p_(i, i) = kFloorVar[blk];
+    } else if (d < floor_var) {
+      p_(i, i) = floor_var;
     }
   }
   // Symmetrise (predict accumulates tiny asymmetries from the block products),
@@ -190,11 +227,38 @@ bool EkfCore::sanitise(bool symmetrise) {
   return true;
 }
 
+bool EkfCore::sanitise_after_predict() {
+  // The block products leave asymmetries of a few ulp per step and a NaN
+  // anywhere reaches the diagonal at the next prediction or update: the whole
+  // matrix is checked and symmetrised every kFullCheckEvery-th prediction.
+  ++predictions_;
+  return sanitise(predictions_ % kFullCheckEvery == 0);
+}
+
 void EkfCore::decouple_inertial(const ErrVec& sigma) {
-  p_.block<kN - A, A>(A, 0).setZero();
-  p_.block<A, kN - A>(0, A).setZero();
-  p_.block<kN - A, kN - A>(A, A).setZero();
-  for (int i = A; i < kN; ++i) p_(i, i) = sigma(i) * sigma(i);
+  constexpr int kInertial = ErrIdx::kCore - A;  // attitude and IMU biases
+  p_.middleRows<kInertial>(A).setZero();
+  p_.middleCols<kInertial>(A).setZero();
+  for (int i = A; i < ErrIdx::kCore; ++i) p_(i, i) = sigma(i) * sigma(i);
+}
+
+void EkfCore::add_variance(int i, Real var) {
+  if (i < 0 || i >= kN || !(var > Real(0)) || !std::isfinite(var)) return;
+  p_(i, i) += var;
+}
+
+void EkfCore::reset_state(int i, Real var) {
+  if (i < 0 || i >= kN) return;
+  p_.row(i).setZero();
+  p_.col(i).setZero();
+  p_(i, i) = var;
+  if (i >= ErrIdx::kCore) x_.range_err(i - ErrIdx::kCore) = Real(0);
+}
+
+void EkfCore::inflate_to(int first, int count, Real var) {
+  for (int i = first; i < first + count && i < kN; ++i) {
+    if (i >= 0 && p_(i, i) < var) p_(i, i) = var;
+  }
 }
 
 }  // namespace uwbnav

@@ -44,8 +44,9 @@ class EkfCore {
                    Real gravity_mps2, const ImuNoise& noise);
 
   // Constant-velocity model (no IMU): white acceleration of density
-  // accel_psd [m/s^2/sqrt(Hz)] in every nav axis; attitude and biases frozen.
-  void predict_cv(Real dt_s, Real accel_psd);
+  // accel_psd [m/s^2/sqrt(Hz)] in every nav axis; the heading walks with
+  // yaw_psd [rad/s/sqrt(Hz)] (turns); tilt and IMU biases frozen.
+  void predict_cv(Real dt_s, Real accel_psd, Real yaw_psd);
 
   // Variance of the innovation of `obs` (H P H^T + R).
   Real innovation_variance(const ErrRow& h, Real r_var) const;
@@ -54,7 +55,10 @@ class EkfCore {
   // u = P H^T and returns H P H^T; update_prepared() then fuses with the
   // innovation and R chosen after the gate, without recomputing u.
   Real prepare(const ErrRow& h);
-  UpdateResult update_prepared(Real innovation, Real r_var);
+  // consider_range_errors: the range-error states are Schmidt "consider"
+  // states for this update (their uncertainty enters S and the cross
+  // covariances, their values and their own covariance block stay).
+  UpdateResult update_prepared(Real innovation, Real r_var, bool consider_range_errors = false);
 
   // Scalar update and immediate injection into the nominal state. The
   // covariance update is the Joseph form written for a scalar with the optimal
@@ -68,10 +72,23 @@ class EkfCore {
   // so callers skip that part after updates). Returns false when P or x is not finite or
   // the state exploded (caller resets).
   bool sanitise(bool symmetrise = true);
+  // sanitise() after a prediction: the diagonal every time, the whole matrix
+  // (finite, symmetrised) every tenth call.
+  bool sanitise_after_predict();
 
-  // Removes the correlation of attitude and biases with position/velocity and
-  // resets their variances (entering the constant-velocity mode).
+  // Removes the correlation of attitude and IMU biases with the other states
+  // and resets their variances to sigma (entering or leaving the
+  // constant-velocity mode). Position, velocity and range errors keep theirs.
   void decouple_inertial(const ErrVec& sigma);
+
+  // Adds process noise var to the variance of error state i (range-error
+  // random walks driven by geometry and time, applied by the Navigator).
+  void add_variance(int i, Real var);
+  // Re-lends error state i: nominal value 0, no correlation, variance var.
+  void reset_state(int i, Real var);
+  // Inflates the variances of error states [first, first + count) to at least
+  // var (diagonal addition of the shortfall keeps P positive semi-definite).
+  void inflate_to(int first, int count, Real var);
 
   const NominalState& state() const { return x_; }
   NominalState& mutable_state() { return x_; }
@@ -90,6 +107,7 @@ class EkfCore {
   // Scratch (a member, not a function static).
   ErrVec u_;      // P H^T
   Real hph_ = Real(0);  // H P H^T of the prepared measurement
+  uint32_t predictions_ = 0;  // counts sanitise() after predictions (periodic full check)
 };
 
 }  // namespace uwbnav

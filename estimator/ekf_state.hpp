@@ -19,20 +19,42 @@
 
 namespace uwbnav {
 
-// Index of each 3-vector block of the error state.
+// Range-error states beside the inertial core: boards with little RAM build
+// with fewer anchor-offset slots (UWBNAV_BIAS_SLOTS, e.g. hal/mps2). A slot is
+// lent to an anchor while it is being ranged (least recently used goes first).
+#ifndef UWBNAV_BIAS_SLOTS
+#define UWBNAV_BIAS_SLOTS 8
+#endif
+constexpr int kBiasSlots = UWBNAV_BIAS_SLOTS;
+static_assert(kBiasSlots >= 3 && kBiasSlots <= static_cast<int>(kMaxAnchors), "anchor offset slots: 3..kMaxAnchors");
+
+// Index of each block of the error state (constexpr table, checked below).
+// Inertial core (seed 003 state, error-state form) followed by the
+// time-correlated range errors (docs/ekf.md "Range errors"): a common range
+// scale error, one offset per tag (antenna delay) and one per anchor slot
+// (antenna delay plus the survey error along the line of sight).
 struct ErrIdx {
   static constexpr int kPos = 0;    // dp_nav [m]
   static constexpr int kVel = 3;    // dv_nav [m/s]
   static constexpr int kAtt = 6;    // dtheta_nav [rad]
   static constexpr int kBa = 9;     // d b_a (body) [m/s^2]
   static constexpr int kBg = 12;    // d b_g (body) [rad/s]
-  static constexpr int kSize = 15;
+  static constexpr int kCore = 15;  // size of the inertial core
+  static constexpr int kScale = 15;  // d s: range scale error, measured = (1 + s) true [-]
+  static constexpr int kTagBias = 16;  // d b_tag, kMaxTags entries [m]
+  static constexpr int kAnchorBias = kTagBias + static_cast<int>(kMaxTags);  // d b_slot, kBiasSlots entries [m]
+  static constexpr int kSize = kAnchorBias + kBiasSlots;
+  static constexpr int kRange = kSize - kCore;  // size of the range-error block
 };
 static_assert(ErrIdx::kPos + 3 == ErrIdx::kVel && ErrIdx::kVel + 3 == ErrIdx::kAtt &&
                   ErrIdx::kAtt + 3 == ErrIdx::kBa && ErrIdx::kBa + 3 == ErrIdx::kBg &&
-                  ErrIdx::kBg + 3 == ErrIdx::kSize,
-              "error-state blocks must tile 0..15 without gaps");
-static_assert(ErrIdx::kSize == 15, "error state is 15 (seed 003 state without the quaternion's redundant component)");
+                  ErrIdx::kBg + 3 == ErrIdx::kCore,
+              "inertial blocks must tile 0..15 without gaps");
+static_assert(ErrIdx::kCore == 15, "inertial core is 15 (seed 003 state without the quaternion's redundant component)");
+static_assert(ErrIdx::kScale == ErrIdx::kCore && ErrIdx::kTagBias == ErrIdx::kScale + 1 &&
+                  ErrIdx::kAnchorBias == ErrIdx::kTagBias + static_cast<int>(kMaxTags) &&
+                  ErrIdx::kSize == ErrIdx::kAnchorBias + kBiasSlots,
+              "range-error blocks must follow the core without gaps");
 
 constexpr int kN = ErrIdx::kSize;
 
@@ -42,6 +64,7 @@ using Quat = Eigen::Matrix<Real, 4, 1>;  // w, x, y, z (scalar first)
 using ErrVec = Eigen::Matrix<Real, kN, 1>;
 using ErrRow = Eigen::Matrix<Real, 1, kN>;
 using ErrCov = Eigen::Matrix<Real, kN, kN>;
+using RangeErrVec = Eigen::Matrix<Real, ErrIdx::kRange, 1>;
 
 // Nominal (full) state.
 struct NominalState {
@@ -50,6 +73,13 @@ struct NominalState {
   Quat q_nav_body = Quat(1, 0, 0, 0); // attitude body -> nav
   Vec3 ba_body_mps2 = Vec3::Zero();   // accelerometer bias [m/s^2]
   Vec3 bg_body_radps = Vec3::Zero();  // gyro bias [rad/s]
+  // Range errors, laid out as the error state from ErrIdx::kScale on:
+  // scale [-], tag offsets [m], anchor-slot offsets [m].
+  RangeErrVec range_err = RangeErrVec::Zero();
+
+  Real range_scale() const { return range_err(0); }
+  Real tag_bias_m(int tag_index) const { return range_err(ErrIdx::kTagBias - ErrIdx::kCore + tag_index); }
+  Real anchor_bias_m(int slot) const { return range_err(ErrIdx::kAnchorBias - ErrIdx::kCore + slot); }
 };
 
 inline Vec3 to_vec3(const Vec3f& v) {

@@ -1,6 +1,8 @@
 // Navigator: the running filter - IMU prediction, gated sequential range
-// updates at each range's own time, ground-vehicle constraints, degraded modes
-// (UWB outage, no IMU), health checks and the 10 ms output.
+// updates at each range's own time with the range-error states and a learned
+// ranging noise, ground-vehicle constraints, the modes (inertial, ranges only
+// while aligning, recovering or without IMU), divergence recovery without a
+// reset, health checks and the 10 ms output.
 #include "estimator/navigator.hpp"
 
 #include <cmath>
@@ -32,6 +34,44 @@ constexpr Real kNoiseFloorTau_s = Real(1);
 // stretches back to cover them (up to kMonitorMaxSpanUs).
 constexpr size_t kMonitorMinRanges = 10;
 constexpr uint64_t kMonitorMaxSpanUs = 30000000;
+// Noise learning (docs/ekf.md "Learned ranging noise"): half squared
+// differences of consecutive innovations of a pair, winsorised at kLearnClip R;
+// E[min(z^2, 9)] = 0.995 of a standard normal, which the sample is divided by.
+constexpr Real kLearnClip = Real(9);
+constexpr Real kLearnClipMean = Real(0.995);
+// Sage-Husa samples: innovations are also truncated near 3 sigma by the gate,
+// E[z^2 | |z| < 3] = 0.9733; a sample only counts while H P H^T is small beside R.
+constexpr Real kLearnClipMeanTrunc = Real(0.9733);
+constexpr Real kLearnMaxHphRatio = Real(4);
+// Innovations of a pair are differenced over at least kLearnLagUs (real UWB
+// errors are correlated over a fraction of a second: consecutive differences
+// would see only the fast part) and at most kLearnMaxPairGapUs [us].
+constexpr uint64_t kLearnLagUs = 500000;
+constexpr uint64_t kLearnMaxPairGapUs = 2000000;
+// Integrity check: period, oldest range used, chi-square threshold (2 dof, 99.9 %).
+constexpr uint64_t kIntegrityPeriodUs = 1000000;
+constexpr uint64_t kIntegrityMaxAgeUs = 500000;
+constexpr Real kIntegrityChi2 = Real(13.8);
+// Correlation time of the measured horizontal acceleration in the CV model [s].
+constexpr Real kCvAccelCorrTime_s = Real(1);
+// Distance over which a pair's own scale error decorrelates in the offset's random walk [m].
+constexpr Real kScaleCorrDist_m = Real(20);
+// Range offsets are learnt only from innovations within this many sigmas.
+constexpr Real kLearnOffsetMaxZ = Real(1.5);
+// Range offsets are learnt only above this horizontal speed [m/s].
+constexpr Real kLearnOffsetMinSpeed_mps = Real(0.2);
+// Pseudo-samples the prior uwb.sigma counts for at start.
+constexpr Real kLearnPriorCount = Real(10);
+// Ground vehicles point where they go: heading of the ranges-only filter from its
+// velocity once faster than this (reversing is slower) and well determined.
+constexpr Real kCvHeadingMinSpeed_mps = Real(2);
+constexpr Real kCvHeadingSlip_rad = Real(0.05);
+// Recovery: re-anchoring holds position and velocity to this at least [m, m/s];
+// inflation brings them up to these variances [m^2, (m/s)^2, rad^2].
+constexpr Real kInflatePosVar_m2 = Real(1.0);
+constexpr Real kInflateVelVar_m2ps2 = Real(1.0);
+constexpr Real kInflateYawVar_rad2 = Real(0.04);
+constexpr Real kReanchorVelSigma_mps = Real(1.5);
 
 }  // namespace
 
@@ -39,6 +79,7 @@ Navigator::Navigator() {
   for (auto& row : prev_tag_pos_) {
     for (auto& v : row) v.setZero();
   }
+  for (auto& a : anchor_slot_) a = -1;
 }
 
 Status Navigator::configure(const SiteConfig& site, const Params& params) {
@@ -51,6 +92,12 @@ Status Navigator::configure(const SiteConfig& site, const Params& params) {
   }
   if (!(site.gravity_mps2 > 5.0F && site.gravity_mps2 < 15.0F)) return Status::kOutOfRange;
   site_ = site;
+  // A commissioned offset must be finite; an uncalibrated site has none.
+  for (auto& row : site_.range_offset_m) {
+    for (float& v : row) {
+      if (!std::isfinite(v)) v = 0.0F;
+    }
+  }
   params_ = params;
   update_params(params);
   const Status gs = gating_.configure(site_, params_);
@@ -67,6 +114,16 @@ Status Navigator::configure(const SiteConfig& site, const Params& params) {
     anchor_status_[i] = AnchorStatus{};
     if (i < site_.num_anchors) anchor_status_[i].anchor_id = site_.anchors[i].id;
   }
+  for (auto& row : pair_) {
+    for (auto& p : row) p = PairRange{};
+  }
+  first_range_t_us_ = 0;
+  r_los_m2_ = cfg_.uwb_sigma_m * cfg_.uwb_sigma_m;
+  r_diff_m2_ = r_los_m2_;
+  r_sh_m2_ = r_los_m2_;
+  r_count_ = Real(0);
+  r_sh_count_ = Real(0);
+  diag_.uwb_sigma_m = static_cast<float>(cfg_.uwb_sigma_m);
   configured_ = true;
   restart(false);
   after_failure_ = false;
@@ -82,7 +139,25 @@ void Navigator::update_params(const Params& params) {
   c.imu.accel_bias_rw = static_cast<Real>(params[ParamId::kImuAccelBiasRw]);
   c.gyro_bias_init = static_cast<Real>(params[ParamId::kImuGyroBiasInit]);
   c.accel_bias_init = static_cast<Real>(params[ParamId::kImuAccelBiasInit]);
-  c.uwb_sigma_m = static_cast<Real>(params[ParamId::kUwbSigma]);
+  const Real sigma_prior = static_cast<Real>(params[ParamId::kUwbSigma]);
+  c.uwb_sigma_min_m = static_cast<Real>(params[ParamId::kUwbSigmaMin]);
+  c.uwb_sigma_max_m = std::fmax(static_cast<Real>(params[ParamId::kUwbSigmaMax]), c.uwb_sigma_min_m);
+  c.noise_window = static_cast<Real>(params[ParamId::kUwbNoiseWindow]);
+  c.learn_noise = params[ParamId::kUwbLearnNoise] > 0.5F;
+  // A changed prior (or learning switched off) restarts the estimate from it.
+  if (sigma_prior != c.uwb_sigma_m || !c.learn_noise) {
+    c.uwb_sigma_m = sigma_prior;
+    r_los_m2_ = sigma_prior * sigma_prior;
+    r_diff_m2_ = r_los_m2_;
+    r_sh_m2_ = r_los_m2_;
+    r_count_ = Real(0);
+    r_sh_count_ = Real(0);
+  }
+  c.anchor_bias_sigma = static_cast<Real>(params[ParamId::kUwbAnchorBiasSigma]);
+  c.tag_bias_sigma = static_cast<Real>(params[ParamId::kUwbTagBiasSigma]);
+  c.scale_sigma = static_cast<Real>(params[ParamId::kUwbScaleSigma]);
+  c.survey_sigma = static_cast<Real>(params[ParamId::kUwbSurveySigma]);
+  c.bias_rw = static_cast<Real>(params[ParamId::kUwbBiasRw]);
   c.imu_timeout_us = param_us(params[ParamId::kInImuTimeoutUs]);
   c.uwb_timeout_us = param_us(params[ParamId::kInUwbTimeoutUs]);
   c.ground_constraints = params[ParamId::kEkfGroundConstraints] > 0.5F && site_.platform == Platform::kGround;
@@ -95,6 +170,7 @@ void Navigator::update_params(const Params& params) {
   c.origin_height = static_cast<Real>(params[ParamId::kEkfOriginHeight]);
   c.constraint_period_us = param_us(1e6F / params[ParamId::kEkfConstraintRate]);
   c.cv_accel_psd = static_cast<Real>(params[ParamId::kEkfCvAccelPsd]);
+  c.cv_yaw_psd = static_cast<Real>(params[ParamId::kEkfCvYawPsd]);
   c.init_window_us = param_us(params[ParamId::kEkfInitWindow] * 1e6F);
   c.init_heading_dist = static_cast<Real>(params[ParamId::kEkfInitHeadingDist]);
   c.init_heading_timeout_us = param_us(params[ParamId::kEkfInitHeadingTimeout] * 1e6F);
@@ -102,6 +178,7 @@ void Navigator::update_params(const Params& params) {
   c.diverge_nis = static_cast<Real>(params[ParamId::kEkfDivergeNis]);
   c.diverge_fraction = static_cast<Real>(params[ParamId::kEkfDivergeFraction]);
   c.diverge_window_us = param_us(params[ParamId::kEkfDivergeWindow] * 1e6F);
+  c.recover_memory_us = param_us(params[ParamId::kEkfRecoverMemory] * 1e6F);
   c.degraded_sigma = static_cast<Real>(params[ParamId::kEkfDegradedSigma]);
   c.init_speed = static_cast<Real>(params[ParamId::kEkfInitSpeed]);
   c.init_yaw_sigma = static_cast<Real>(params[ParamId::kEkfInitYawSigma]);
@@ -117,7 +194,19 @@ const AnchorStatus& Navigator::anchor_status(size_t index) const {
   return anchor_status_[index < kMaxAnchors ? index : kMaxAnchors - 1];
 }
 
+AnchorOffset Navigator::anchor_offset(size_t index) const {
+  AnchorOffset out;
+  if (phase_ != Phase::kRunning || index >= kMaxAnchors || anchor_slot_[index] < 0) return out;
+  const int i = ErrIdx::kAnchorBias + anchor_slot_[index];
+  out.offset_m = static_cast<float>(ekf_.state().range_err(i - ErrIdx::kCore));
+  out.sigma_m = static_cast<float>(std::sqrt(ekf_.cov()(i, i)));
+  return out;
+}
+
+float Navigator::range_scale() const { return static_cast<float>(ekf_.state().range_scale()); }
+
 void Navigator::reset() {
+  ++diag_.operator_resets;
   restart(false);
   after_failure_ = false;
 }
@@ -125,6 +214,47 @@ void Navigator::reset() {
 Vec3 Navigator::lever(int tag_index) const {
   if (tag_index < 0 || static_cast<size_t>(tag_index) >= site_.num_tags) return Vec3::Zero();
   return to_vec3(site_.tags[tag_index].lever_body_m);
+}
+
+Vec3 Navigator::model_lever(int tag_index) const {
+  // Ranges-only filter with an unknown heading: the state is the tags'
+  // centroid horizontally, so each tag sits at the centroid plus its vertical offset.
+  const Vec3 lev = lever(tag_index);
+  if (!cv_mode_ || cv_yaw_known_) return lev;
+  const Mat3& c = ekf_.dcm();
+  return c.transpose() * Vec3(0, 0, (c * lev).z());
+}
+
+Real Navigator::anchor_bias_prior_var() const {
+  // Antenna delay (or the commissioned offset's residual) plus the survey error
+  // along whatever line of sight the anchor is first seen on.
+  const Real cal = site_.range_offset_sigma_m;
+  const Real ad = std::isfinite(cal) ? cal : cfg_.anchor_bias_sigma;
+  return ad * ad + cfg_.survey_sigma * cfg_.survey_sigma;
+}
+
+Real Navigator::tag_bias_prior_var() const {
+  const Real cal = site_.range_offset_sigma_m;
+  const Real td = std::isfinite(cal) ? cal : cfg_.tag_bias_sigma;
+  return td * td;
+}
+
+Real Navigator::known_offset_m(int anchor_index, int tag_index) const {
+  if (anchor_index < 0 || tag_index < 0 || static_cast<size_t>(anchor_index) >= kMaxAnchors ||
+      static_cast<size_t>(tag_index) >= kMaxTags) {
+    return Real(0);
+  }
+  return static_cast<Real>(site_.range_offset_m[anchor_index][tag_index]);
+}
+
+Real Navigator::cv_accel_psd(uint64_t t_us) const {
+  // The constant-velocity model's white acceleration must cover the vehicle's
+  // actual acceleration: an IMU that is present (aligning, recovering) measures
+  // its horizontal magnitude in the levelled frame, which enters with a 1 s
+  // correlation time on top of the parameter (a car pulling away at 2 m/s^2
+  // otherwise outruns a filter tuned for cruising).
+  if (!imu_alive(t_us) || !levelled_) return cfg_.cv_accel_psd;
+  return std::sqrt(cfg_.cv_accel_psd * cfg_.cv_accel_psd + accel_h_ms_ * kCvAccelCorrTime_s);
 }
 
 bool Navigator::imu_alive(uint64_t t_us) const {
@@ -167,18 +297,11 @@ Status Navigator::on_imu(const ImuSample& imu) {
   rest_.add(imu.t_us, f, w);
   last_gyro_body_radps_ = w;
 
-  if (phase_ != Phase::kRunning) {
-    if (!gap) init_on_imu(imu);
-    if (first_imu_t_us_ == 0) first_imu_t_us_ = imu.t_us;
-    prev_imu_ = imu;
-    have_prev_imu_ = true;
-    return Status::kOk;
-  }
-  if (cv_mode_) {
-    // IMU back after an outage (or first IMU of a UWB-first start): keep the
-    // constant-velocity solution while levelling and heading are re-acquired
-    // exactly as at power-on; start_filter() then switches to the IMU model.
-    if (gap) begin_imu_recovery();
+  if (phase_ != Phase::kRunning || cv_mode_) {
+    // Before the first fix and while the ranges-only filter publishes, the IMU
+    // prepares the hand-over (levelling, relative attitude, yaw bank); an IMU
+    // that comes back after a gap starts that preparation again.
+    if (gap && phase_ == Phase::kRunning) begin_imu_recovery();
     if (first_imu_t_us_ == 0) first_imu_t_us_ = imu.t_us;
     if (!gap) init_on_imu(imu);
     prev_imu_ = imu;
@@ -203,7 +326,29 @@ void Navigator::apply_constraints(uint64_t t_us) {
   if (t_us - last_constraint_us_ < cfg_.constraint_period_us) return;
   last_constraint_us_ = t_us;
   if (height_on_) (void)fuse(mm_height(ekf_.state(), height_ref_m_, height_sigma_m_));
-  if (!cfg_.ground_constraints || cv_mode_) return;
+  if (cv_mode_) {
+    // Ranges only. An IMU that is present (aligning, recovering) still tells
+    // rest, on any platform (imu_still: quiet and unchanged specific force
+    // since rest was confirmed by the LS track), with a slow filter.
+    if (imu_alive(t_us) && levelled_) {
+      rest_.evaluate();
+      const bool slow =
+          ekf_.state().vel_nav_mps.norm() < kZuptMaxSpeed_mps + Real(2) * std::sqrt(ekf_.cov()(3, 3));
+      cv_rest_latched_ = imu_still(t_us) && slow;
+      if (cv_rest_latched_) {
+        for (int i = 0; i < 3; ++i) (void)fuse(mm_zupt(ekf_.state(), i, cfg_.zupt_sigma));
+        return;
+      }
+    }
+    // Ground vehicles: the non-holonomic constraint ties the heading to the
+    // velocity once the heading is known (lever arms of several tags, or the
+    // direction of travel).
+    if (cfg_.ground_constraints && cv_yaw_known_) {
+      (void)fuse(mm_nhc(ekf_.state(), ekf_.dcm(), 1, cfg_.nhc_sigma_lat));
+    }
+    return;
+  }
+  if (!cfg_.ground_constraints) return;
   rest_.evaluate();
   // The IMU's spread alone cannot tell rest from constant velocity or a steady
   // brake: the filter speed must be small and the mean specific force vertical.
@@ -225,20 +370,123 @@ void Navigator::apply_constraints(uint64_t t_us) {
 
 bool Navigator::fuse(const ScalarObs& obs) { return ekf_.update(obs).applied; }
 
-void Navigator::check_health(bool symmetrise) {
-  if (!ekf_.sanitise(symmetrise)) restart(true);
+void Navigator::check_health(bool after_predict) {
+  if (!(after_predict ? ekf_.sanitise_after_predict() : ekf_.sanitise(false))) restart(true);
 }
 
-void Navigator::enter_cv_mode() {
+void Navigator::enter_cv_mode(NavMode reason) {
+  // The IMU filter leaves: position, velocity, heading and range errors carry
+  // on in the ranges-only model; tilt is levelled, IMU biases are dropped.
   cv_mode_ = true;
+  cv_reason_ = reason;
+  cv_yaw_known_ = true;
   ErrVec sigma = ErrVec::Zero();
-  sigma.segment<3>(ErrIdx::kAtt).setConstant(Real(0.1));
+  const Real yaw_sigma = std::sqrt(ekf_.cov()(ErrIdx::kAtt + 2, ErrIdx::kAtt + 2));
+  sigma.segment<3>(ErrIdx::kAtt) = Vec3(Real(0.05), Real(0.05), yaw_sigma);
   sigma.segment<3>(ErrIdx::kBa).setConstant(cfg_.accel_bias_init);
   sigma.segment<3>(ErrIdx::kBg).setConstant(cfg_.gyro_bias_init);
   ekf_.decouple_inertial(sigma);
-  // Body level; keep the yaw (used for the lever arm and the heading output).
   ekf_.mutable_state().q_nav_body = quat_from_yaw(quat_yaw(ekf_.state().q_nav_body));
   ekf_.refresh_dcm();
+  heading_wait_since_us_ = 0;
+}
+
+int Navigator::lend_bias_slot(int anchor_index, uint64_t t_us) {
+  if (anchor_index < 0 || static_cast<size_t>(anchor_index) >= kMaxAnchors) return -1;
+  if (anchor_slot_[anchor_index] >= 0) return anchor_slot_[anchor_index];
+  // A free slot, else the one whose anchor was ranged longest ago: its offset
+  // estimate is dropped (marginalised), the new anchor starts from the prior.
+  int best = 0;
+  for (int s = 0; s < kBiasSlots; ++s) {
+    if (slots_[s].anchor_index < 0) {
+      best = s;
+      break;
+    }
+    if (slots_[s].last_t_us < slots_[best].last_t_us) best = s;
+  }
+  if (slots_[best].anchor_index >= 0) anchor_slot_[slots_[best].anchor_index] = -1;
+  slots_[best] = BiasSlot{};
+  slots_[best].anchor_index = anchor_index;
+  slots_[best].last_t_us = t_us;
+  anchor_slot_[anchor_index] = static_cast<int8_t>(best);
+  ekf_.reset_state(ErrIdx::kAnchorBias + best, anchor_bias_prior_var());
+  return best;
+}
+
+void Navigator::range_error_process_noise(int slot, int anchor_index, int tag_index, uint64_t t_us,
+                                          const Vec3& tag_pos_nav_m) {
+  // The offsets drift slowly (random walk), and an anchor's offset changes as the
+  // line of sight turns (survey error -u.da) and as the distance changes (the
+  // pair's own scale error): docs/ekf.md "Range errors". Both are deterministic
+  // in the geometry; a random walk in the angle turned and the distance changed
+  // by each pair since its previous range (correlation lengths 1 rad and
+  // kScaleCorrDist_m) carries them honestly without states of their own, and
+  // never raises the offset's variance above its prior.
+  const Real rw2 = cfg_.bias_rw * cfg_.bias_rw;
+  if (slot >= 0) {
+    BiasSlot& s = slots_[slot];
+    Real q = t_us > s.last_t_us && s.last_t_us != 0 ? rw2 * seconds(diff_us(t_us, s.last_t_us)) : Real(0);
+    if (prev_tag_valid_[anchor_index][tag_index]) {
+      const Vec3 anchor = to_vec3(site_.anchors[anchor_index].pos_nav_m);
+      const Vec3 d_now = tag_pos_nav_m - anchor;
+      const Vec3 d_prev = prev_tag_pos_[anchor_index][tag_index] - anchor;
+      const Real n_now = d_now.norm();
+      const Real n_prev = d_prev.norm();
+      if (n_now > Real(1e-3) && n_prev > Real(1e-3)) {
+        q += cfg_.survey_sigma * cfg_.survey_sigma * (d_now / n_now - d_prev / n_prev).norm() +
+             cfg_.scale_sigma * cfg_.scale_sigma * kScaleCorrDist_m * std::fabs(n_now - n_prev);
+      }
+    }
+    const int i = ErrIdx::kAnchorBias + slot;
+    const Real room = anchor_bias_prior_var() - ekf_.cov()(i, i);
+    if (room > Real(0) && q > Real(0)) ekf_.add_variance(i, std::fmin(q, room));
+    s.last_t_us = t_us;
+  }
+  if (tag_index >= 0 && static_cast<size_t>(tag_index) < kMaxTags) {
+    uint64_t& t_prev = tag_bias_t_us_[tag_index];
+    if (t_prev != 0 && t_us > t_prev) ekf_.add_variance(ErrIdx::kTagBias + tag_index, rw2 * seconds(diff_us(t_us, t_prev)));
+    t_prev = t_us;
+  }
+}
+
+void Navigator::learn_noise(int anchor_index, int tag_index, uint64_t t_us, Real innovation, Real hph, bool fused) {
+  // The LOS ranging variance R the filter uses is the larger of two on-line
+  // estimates (docs/ekf.md "Learned ranging noise"), each averaged over
+  // uwb.noise_window samples from fused ranges, squares winsorised at 3 sigma,
+  // bounded by uwb.sigma_min/max:
+  //  - differenced: half the squared change of a pair's innovation over at least
+  //    kLearnLagUs, in which the pair's offset, survey and scale errors and the
+  //    filter's own error cancel: the white part of the ranging error, right
+  //    even while the offset states are pessimistic (consider);
+  //  - Sage-Husa: nu^2 - H P H^T, which also sees ranging errors correlated
+  //    over seconds (real multipath) that the differences miss, but reads a
+  //    pessimistic covariance as missing noise (hence the max, not either alone).
+  if (!fused) return;
+  const Real lo = cfg_.uwb_sigma_min_m * cfg_.uwb_sigma_min_m;
+  const Real hi = cfg_.uwb_sigma_max_m * cfg_.uwb_sigma_max_m;
+  if (cfg_.learn_noise && hph < kLearnMaxHphRatio * r_los_m2_) {
+    const Real s = hph + r_los_m2_;
+    const Real sample = std::fmin(innovation * innovation, kLearnClip * s) / kLearnClipMeanTrunc - hph;
+    if (r_sh_count_ < cfg_.noise_window) r_sh_count_ += Real(1);
+    r_sh_m2_ += (sample - r_sh_m2_) / (r_sh_count_ + kLearnPriorCount);
+    r_sh_m2_ = std::fmin(std::fmax(r_sh_m2_, lo), hi);
+  }
+  PrevInnovation& ref = prev_innov_[anchor_index][tag_index];
+  if (ref.t_us == 0 || t_us <= ref.t_us || t_us - ref.t_us > kLearnMaxPairGapUs) {
+    ref = PrevInnovation{t_us, static_cast<float>(innovation)};
+  } else if (t_us - ref.t_us >= kLearnLagUs) {
+    const Real d = innovation - static_cast<Real>(ref.innovation_m);
+    ref = PrevInnovation{t_us, static_cast<float>(innovation)};
+    if (cfg_.learn_noise) {
+      const Real sample = std::fmin(Real(0.5) * d * d, kLearnClip * r_los_m2_) / kLearnClipMean;
+      if (r_count_ < cfg_.noise_window) r_count_ += Real(1);
+      r_diff_m2_ += (sample - r_diff_m2_) / (r_count_ + kLearnPriorCount);
+      r_diff_m2_ = std::fmin(std::fmax(r_diff_m2_, lo), hi);
+    }
+  }
+  if (!cfg_.learn_noise) return;
+  r_los_m2_ = std::fmax(r_diff_m2_, r_sh_m2_);
+  diag_.uwb_sigma_m = static_cast<float>(std::sqrt(r_los_m2_));
 }
 
 RangeReport Navigator::on_range(const UwbRange& range) {
@@ -259,42 +507,59 @@ RangeReport Navigator::on_range(const UwbRange& range) {
   AnchorStatus& as = anchor_status_[ai];
   as.last_t_us = range.t_us;
   as.last_range_m = range.range_m;
+  pair_[ai][ti] = PairRange{range.t_us, range.range_m, true};
 
+  if (phase_ != Phase::kRunning) {
+    // No filter yet: the first LS fix starts the ranges-only filter at once.
+    TrackFix fix;
+    if (init_track(ai, ti, range)) {
+      fix = last_fix_per_tag_[ti];
+      start_cv_filter(range.t_us, fix, site_.has_imu ? NavMode::kAligning : NavMode::kUwbOnly);
+    }
+    ++diag_.ranges_rejected;
+    ++cycle_rejected_;
+    return rep;
+  }
+
+  if (!cv_mode_ && !imu_alive(range.t_us)) enter_cv_mode(NavMode::kUwbOnly);
+  if (cv_mode_ && range.t_us > t_state_us_) {
+    ekf_.predict_cv(seconds(diff_us(range.t_us, t_state_us_)), cv_accel_psd(range.t_us), cfg_.cv_yaw_psd);
+    t_state_us_ = range.t_us;
+    check_health();
+    if (phase_ != Phase::kRunning) return rep;
+    apply_constraints(range.t_us);
+    // Ground vehicles point where they go: a well-determined velocity gives the
+    // heading of the ranges-only filter (from then on the NHC keeps it).
+    const Vec3& v = ekf_.state().vel_nav_mps;
+    const Real speed = v.head<2>().norm();
+    const Real vel_sigma = std::sqrt(ekf_.cov()(ErrIdx::kVel, ErrIdx::kVel) + ekf_.cov()(ErrIdx::kVel + 1, ErrIdx::kVel + 1));
+    if (!cv_yaw_known_ && cfg_.ground_constraints && speed > kCvHeadingMinSpeed_mps && vel_sigma < Real(0.25) * speed) {
+      cv_set_yaw(std::atan2(v.y(), v.x()), std::atan2(vel_sigma, speed) + kCvHeadingSlip_rad);
+    }
+  }
+
+  const int slot = lend_bias_slot(ai, range.t_us);
+  RangeErrorSlots es;
+  es.tag_index = ti;
+  es.anchor_slot = slot;
+  es.known_offset_m = known_offset_m(ai, ti);
   RangeContext ctx;
   ctx.range = range;
   ctx.anchor_index = ai;
   ctx.anchor_pos_nav_m = site_.anchors[ai].pos_nav_m;
-  const Real r_nom = cfg_.uwb_sigma_m * cfg_.uwb_sigma_m;
+  const Real r_nom = r_los_m2_;
   ctx.meas_var_m2 = static_cast<float>(r_nom);
 
-  if (phase_ == Phase::kRunning) {
-    if (!cv_mode_ && !imu_alive(range.t_us)) enter_cv_mode();
-    if (cv_mode_ && range.t_us > t_state_us_) {
-      ekf_.predict_cv(seconds(diff_us(range.t_us, t_state_us_)), cfg_.cv_accel_psd);
-      t_state_us_ = range.t_us;
-      check_health();
-      if (height_on_) apply_constraints(range.t_us);
-      // Ground vehicles point where they go: heading from the velocity.
-      const Vec3& v = ekf_.state().vel_nav_mps;
-      if (cfg_.ground_constraints || site_.platform == Platform::kGround) {
-        if (v.head<2>().norm() > Real(0.5)) {
-          ekf_.mutable_state().q_nav_body = quat_from_yaw(std::atan2(v.y(), v.x()));
-          ekf_.refresh_dcm();
-        }
-      }
-    }
-  }
-
-  const bool running = phase_ == Phase::kRunning;
-  RangePrediction pred;
-  if (running) {
-    const Real dt_r = seconds(diff_us(range.t_us, t_state_us_));
-    pred = mm_range_predict(ekf_.state(), ekf_.dcm(), cv_mode_ ? Vec3::Zero() : last_gyro_body_radps_, lever(ti),
-                            to_vec3(ctx.anchor_pos_nav_m), dt_r);
-  }
+  const Real dt_r = seconds(diff_us(range.t_us, t_state_us_));
+  const RangePrediction pred =
+      mm_range_predict(ekf_.state(), ekf_.dcm(), cv_mode_ ? Vec3::Zero() : last_gyro_body_radps_, model_lever(ti),
+                       to_vec3(ctx.anchor_pos_nav_m), dt_r, es);
   Real s_nom = Real(0);
-  if (running && pred.valid) {
-    s_nom = ekf_.prepare(pred.h) + r_nom;
+  Real hph = Real(0);
+  if (pred.valid) {
+    range_error_process_noise(slot, ai, ti, range.t_us, pred.tag_pos_nav_m);
+    hph = ekf_.prepare(pred.h);
+    s_nom = hph + r_nom;
     const Real innov = static_cast<Real>(range.range_m) - pred.range_m;
     ctx.tag_pos_nav_m = to_vec3f(pred.tag_pos_nav_m);
     ctx.predicted_range_m = static_cast<float>(pred.range_m);
@@ -307,22 +572,36 @@ RangeReport Navigator::on_range(const UwbRange& range) {
     const Real sig_h = std::sqrt(ekf_.cov()(0, 0) + ekf_.cov()(1, 1));
     // Without IMU the prediction carries no independent motion information
     // (the consistency evidence of seed 000 eq. 3 needs an inertial distance).
-    ctx.filter_ready = !cv_mode_ && sig_h < cfg_.degraded_sigma;
+    ctx.filter_ready = sig_h < cfg_.degraded_sigma;
   }
 
   const GatingDecision d = gating_.assess(ctx);
   bool used = false;
+  const Real innov = pred.valid ? static_cast<Real>(range.range_m) - pred.range_m : Real(0);
   // Hard guard behind the gating layer: a range this far off is a gross error
-  // whatever the policy says (a drifted filter is re-initialised by the
-  // divergence monitor instead of being dragged by blunders).
-  const Real innov_abs = running && pred.valid ? std::fabs(static_cast<Real>(range.range_m) - pred.range_m) : Real(0);
-  // The gating layer's escape (robust mode with inflated R) exists for a filter
-  // that drifted away from its own gate: the hard guard must not undo it.
+  // whatever the policy says (a drifted filter is recovered by the divergence
+  // monitor instead of being dragged by blunders). The gating layer's escape
+  // (robust mode) exists for a filter that drifted from its own gate: the
+  // guard must not undo it.
   const bool escape = gating_.escape_active() && d.use;
-  const bool gross = !escape && innov_abs > kHardGateSigma * std::sqrt(s_nom) && innov_abs > kHardGateMin_m;
-  if (running && pred.valid && d.use && !gross) {
-    const Real scale = std::isfinite(d.r_scale) && d.r_scale >= 1.0F ? static_cast<Real>(d.r_scale) : Real(1);
-    used = ekf_.update_prepared(static_cast<Real>(range.range_m) - pred.range_m, r_nom * scale).applied;
+  const bool gross = !escape && std::fabs(innov) > kHardGateSigma * std::sqrt(s_nom) && std::fabs(innov) > kHardGateMin_m;
+  const Real scale = std::isfinite(d.r_scale) && d.r_scale >= 1.0F ? static_cast<Real>(d.r_scale) : Real(1);
+  if (pred.valid && d.use && !gross) {
+    // Offsets are learnt only from ranges the gate trusts, fused by a filter in
+    // its nominal model, while the vehicle moves: an NLOS range let in by the
+    // robust mode or fused while the heading is unknown would otherwise be
+    // remembered as an antenna offset, and at rest an offset cannot be told
+    // from the vehicle's position or from the steady NLOS bias of an anchor
+    // hidden behind something while the vehicle waits. Such ranges treat the
+    // range errors as consider states (docs/ekf.md "Range errors").
+    const bool nominal = !cv_mode_;
+    const bool moving = ekf_.state().vel_nav_mps.head<2>().norm() > kLearnOffsetMinSpeed_mps;
+    // A symmetric window on the innovation keeps the learnt offsets unbiased:
+    // the gate removes long (NLOS-like) ranges only, so learning from every
+    // fused range would see the short side of the noise and drift negative.
+    const bool central = std::fabs(innov) < kLearnOffsetMaxZ * std::sqrt(s_nom);
+    const bool learn_offsets = nominal && moving && central && !escape;
+    used = ekf_.update_prepared(innov, r_nom * scale, !learn_offsets).applied;
   }
   gating_.on_result(ctx, d, used);
 
@@ -343,30 +622,30 @@ RangeReport Navigator::on_range(const UwbRange& range) {
   }
   as.nlos_state = d.nlos;
 
-  if (running) {
-    if (used) {
-      ++as.used_count;
-      ++diag_.ranges_used;
-      ++cycle_used_;
-      diag_.last_range_used_t_us = range.t_us;
-    } else {
-      ++diag_.ranges_rejected;
-      ++cycle_rejected_;
-    }
-    if (pred.valid) {
-      prev_tag_pos_[ai][ti] = pred.tag_pos_nav_m;
-      prev_tag_valid_[ai][ti] = true;
-      const Real innov = static_cast<Real>(range.range_m) - pred.range_m;
-      monitor_divergence(range.t_us, innov * innov / s_nom);
-    }
-    check_health(false);
-    if (cv_mode_ && imu_alive(range.t_us)) {
-      // IMU recovery: build the LS track and try the heading in the background.
-      if (init_track(ai, ti, range) && levelled_) try_heading(range.t_us);
-      if (cv_mode_ && levelled_) yaw_bank_on_range(ai, ti, range);
-    }
+  if (used) {
+    ++as.used_count;
+    ++diag_.ranges_used;
+    ++cycle_used_;
+    diag_.last_range_used_t_us = range.t_us;
   } else {
-    init_on_range(ai, ti, range);
+    ++diag_.ranges_rejected;
+    ++cycle_rejected_;
+  }
+  if (pred.valid) {
+    prev_tag_pos_[ai][ti] = pred.tag_pos_nav_m;
+    prev_tag_valid_[ai][ti] = true;
+    learn_noise(ai, ti, range.t_us, innov, hph, used && !escape);
+    monitor_divergence(range.t_us, innov * innov / s_nom);
+  }
+  check_health(false);
+  if (phase_ == Phase::kRunning) integrity_check(range.t_us, ti);
+  if (phase_ == Phase::kRunning && cv_mode_) {
+    if (imu_alive(range.t_us)) {
+      align_in_background(ai, ti, range);
+    } else if (!cv_yaw_known_ && site_.num_tags > 1) {
+      // Several tags and no IMU: the heading comes from the tags' baseline.
+      if (init_track(ai, ti, range)) try_heading(range.t_us);
+    }
   }
   return rep;
 }
@@ -393,22 +672,160 @@ void Navigator::monitor_divergence(uint64_t t_us, Real nis) {
   const bool window_covered = t_us - oldest >= cfg_.diverge_window_us * 3 / 4 || n >= kMonitorCapacity;
   if (n >= kMonitorMinRanges && window_covered &&
       static_cast<Real>(bad) >= cfg_.diverge_fraction * static_cast<Real>(n)) {
-    ++diag_.reinits;
-    // Keep the attitude and gyro bias (the IMU solution rarely diverges in
-    // attitude first); re-acquire position and heading from UWB.
-    const Quat q = ekf_.state().q_nav_body;
-    const Vec3 bg = ekf_.state().bg_body_radps;
-    const bool had_imu = !cv_mode_;
-    const uint64_t window_us = window_us_;  // the fix window learnt for this ranging rate
-    restart(false);
-    window_us_ = window_us;
-    after_failure_ = true;
-    if (had_imu) {
-      q_init_ = q;
-      bg_init_ = bg;
-      levelled_ = true;
-    }
+    recover(t_us);
   }
+}
+
+void Navigator::integrity_check(uint64_t t_us, int tag_index) {
+  // Seed 001 RAIM turned on the filter itself (docs/ekf.md "Integrity check"):
+  // at most every kIntegrityPeriodUs, an LS fix from the latest range of each
+  // anchor to this tag, each moved to now along its line of sight with the
+  // filter's velocity, with at least two degrees of freedom so that the fix can
+  // check itself and exclude one bad range. A filter whose tag position differs
+  // from that fix by more than the two covariances explain (chi-square, 2 dof,
+  // 99.9 %) has left its ranges - typically by rejecting, as NLOS, the very
+  // ranges that would correct it: it is re-anchored to the fix.
+  if (last_integrity_us_ != 0 && t_us - last_integrity_us_ < kIntegrityPeriodUs) return;
+  last_integrity_us_ = t_us;
+  const NominalState& x = ekf_.state();
+  const Real dt = seconds(diff_us(t_us, t_state_us_));
+  const Vec3 lev = model_lever(tag_index);
+  const Vec3 tag_nav = x.pos_nav_m + x.vel_nav_mps * dt + ekf_.dcm() * lev;
+  const Real vel_var = ekf_.cov()(3, 3) + ekf_.cov()(4, 4);
+  LsRange ranges[kMaxAnchors];
+  size_t n = 0;
+  for (size_t a = 0; a < site_.num_anchors; ++a) {
+    const PairRange& pr = pair_[a][tag_index];
+    if (!pr.valid || t_us < pr.t_us || t_us - pr.t_us > kIntegrityMaxAgeUs) continue;
+    const Vec3 anchor = to_vec3(site_.anchors[a].pos_nav_m);
+    const Vec3 diff = tag_nav - anchor;
+    const Real dist = diff.norm();
+    if (!(dist > Real(1e-3))) continue;
+    const Real age_s = seconds(diff_us(t_us, pr.t_us));
+    const Real moved = (diff / dist).dot(x.vel_nav_mps) * age_s;
+    ranges[n].anchor_pos_nav_m = site_.anchors[a].pos_nav_m;
+    ranges[n].range_m = static_cast<float>(static_cast<Real>(pr.range_m) -
+                                           known_offset_m(static_cast<int>(a), tag_index) + moved);
+    ranges[n].sigma_m =
+        static_cast<float>(std::sqrt(r_los_m2_ + anchor_bias_prior_var() + vel_var * age_s * age_s));
+    ++n;
+  }
+  LsOptions opt;
+  opt.two_d = planar_;
+  opt.known_z_m = static_cast<float>(tag_nav.z());
+  opt.has_initial_guess = true;
+  opt.initial_guess_nav_m = to_vec3f(tag_nav);
+  if (n < (opt.two_d ? 4U : 5U)) return;  // two degrees of freedom at least
+  LsFix ls;
+  if (robust_ls_fix(ranges, n, opt, ls) != Status::kOk) return;  // the epoch itself is inconsistent
+  // The fix must pass its own chi-square at 99.9 % (stricter than the start-up
+  // test): an epoch with an NLOS range left in is no reference.
+  constexpr Real kChi2_999[8] = {Real(10.83), Real(13.82), Real(16.27), Real(18.47),
+                                 Real(20.52), Real(22.46), Real(24.32), Real(26.12)};
+  if (ls.dof < 1 || !ls.converged || static_cast<Real>(ls.weighted_ssr) > kChi2_999[ls.dof > 8 ? 7 : ls.dof - 1]) return;
+  const Real dx = static_cast<Real>(ls.pos_nav_m.x) - tag_nav.x();
+  const Real dy = static_cast<Real>(ls.pos_nav_m.y) - tag_nav.y();
+  Vec3 lev_nav = ekf_.dcm() * lev;
+  // Heading unknown: the tag lies anywhere on its lever's circle about the
+  // tags' centroid (the state); otherwise the heading's variance turns the lever.
+  const Real lever_var = cv_mode_ && !cv_yaw_known_
+                             ? (lever(tag_index) - mean_lever()).head<2>().squaredNorm()
+                             : lev_nav.head<2>().squaredNorm() * ekf_.cov()(ErrIdx::kAtt + 2, ErrIdx::kAtt + 2);
+  const Real cxx = static_cast<Real>(ls.cov_nav_m2[0][0]) + ekf_.cov()(0, 0) + lever_var;
+  const Real cyy = static_cast<Real>(ls.cov_nav_m2[1][1]) + ekf_.cov()(1, 1) + lever_var;
+  const Real cxy = static_cast<Real>(ls.cov_nav_m2[0][1]) + ekf_.cov()(0, 1);
+  const Real det = cxx * cyy - cxy * cxy;
+  if (!(det > Real(0))) return;
+  const Real chi2 = (cyy * dx * dx - Real(2) * cxy * dx * dy + cxx * dy * dy) / det;
+  if (!(chi2 > kIntegrityChi2)) return;
+  ++diag_.integrity_fails;
+  // The filter's claim does not cover its distance to an independent fix:
+  // enlarge the claim to cover it (the gate then lets the ranges that would
+  // correct the filter back in). Repeated failures escalate through recover().
+  const Real gap2 = dx * dx + dy * dy;
+  const bool recent = last_recovery_us_ != 0 && t_us - last_recovery_us_ < cfg_.recover_memory_us;
+  if (recent) {
+    recover(t_us);
+    return;
+  }
+  ++diag_.inflations;
+  last_recovery_us_ = t_us;
+  recovery_level_ = 1;
+  ekf_.inflate_to(ErrIdx::kPos, 2, gap2);
+  ekf_.inflate_to(ErrIdx::kVel, 2, gap2 * Real(0.25));
+}
+
+void Navigator::recover(uint64_t t_us, uint8_t min_level) {
+  // Recovery without a reset (docs/ekf.md "Recovery"): each divergence that
+  // follows the previous one within recover_memory escalates one step. Output
+  // continues throughout; nothing here discards the solution.
+  const bool recent = last_recovery_us_ != 0 && t_us - last_recovery_us_ < cfg_.recover_memory_us;
+  uint8_t level = recent ? static_cast<uint8_t>(recovery_level_ + 1) : uint8_t(1);
+  if (level < min_level) level = min_level;
+  last_recovery_us_ = t_us;
+  recovery_level_ = level > 3 ? uint8_t(3) : level;
+  monitor_head_ = 0;
+  monitor_count_ = 0;
+  const Real anchor_var = anchor_bias_prior_var();
+  if (level == 1) {
+    // 1. Inflate: the covariance was too small for what the ranges say.
+    ++diag_.inflations;
+    ekf_.inflate_to(ErrIdx::kPos, 2, kInflatePosVar_m2);
+    ekf_.inflate_to(ErrIdx::kVel, 2, kInflateVelVar_m2ps2);
+    if (!cv_mode_) ekf_.inflate_to(ErrIdx::kAtt + 2, 1, kInflateYawVar_rad2);
+    ekf_.inflate_to(ErrIdx::kTagBias, static_cast<int>(kMaxTags), tag_bias_prior_var());
+    ekf_.inflate_to(ErrIdx::kAnchorBias, kBiasSlots, anchor_var);
+    return;
+  }
+  // A fresh LS fix from the latest range of each anchor, for steps 2 and 3.
+  TrackFix fix;
+  int tag = -1;
+  const size_t n_tags = site_.num_tags == 0 ? 1 : site_.num_tags;
+  for (size_t t = 0; t < n_tags && t < kMaxTags && tag < 0; ++t) {
+    if (try_ls_fix(t_us, static_cast<int>(t), fix)) tag = static_cast<int>(t);
+  }
+  if (tag < 0) {
+    // Nothing to re-anchor to: inflate again.
+    ++diag_.inflations;
+    ekf_.inflate_to(ErrIdx::kPos, 2, kInflatePosVar_m2);
+    ekf_.inflate_to(ErrIdx::kVel, 2, kInflateVelVar_m2ps2);
+    return;
+  }
+  if (level == 2) {
+    // 2. Re-anchor position and velocity to the fix; attitude and IMU biases
+    // stay, the range errors go back to their priors.
+    ++diag_.reanchors;
+    NominalState& x = ekf_.mutable_state();
+    x.pos_nav_m = fix.tag_pos_nav_m - ekf_.dcm() * model_lever(tag);
+    const Real pos_h = std::sqrt(Real(0.5)) * fix.sigma_h_m + Real(0.05);
+    const Real pos_v = fix.sigma_v_m > Real(0) ? fix.sigma_v_m : std::sqrt(ekf_.cov()(2, 2));
+    for (int i = 0; i < 3; ++i) ekf_.reset_state(ErrIdx::kPos + i, i < 2 ? pos_h * pos_h : pos_v * pos_v);
+    for (int i = 0; i < 2; ++i) ekf_.reset_state(ErrIdx::kVel + i, kReanchorVelSigma_mps * kReanchorVelSigma_mps);
+    ekf_.inflate_to(ErrIdx::kTagBias, static_cast<int>(kMaxTags), tag_bias_prior_var());
+    ekf_.inflate_to(ErrIdx::kAnchorBias, kBiasSlots, anchor_var);
+    if (!cv_mode_) ekf_.inflate_to(ErrIdx::kAtt + 2, 1, kInflateYawVar_rad2);
+    return;
+  }
+  // 3. Re-align (counted as a re-initialisation). The IMU filter's heading is
+  // not trusted any more: the ranges-only filter, re-anchored to the fix,
+  // publishes (recovering) while levelling and heading are acquired again;
+  // attitude and gyro bias seed the relative attitude. A diverged ranges-only
+  // filter simply starts again from the fix.
+  ++diag_.reinits;
+  const NavMode reason = cv_mode_ ? cv_reason_ : NavMode::kRecovering;
+  if (!cv_mode_) {
+    q_init_ = ekf_.state().q_nav_body;
+    bg_init_ = ekf_.state().bg_body_radps;
+    ba_init_ = ekf_.state().ba_body_mps2;
+    levelled_ = true;
+  }
+  track_head_ = 0;
+  track_count_ = 0;
+  for (auto& f : last_fix_per_tag_) f = TrackFix{};
+  gsf_.reset();
+  start_cv_filter(t_us, fix, reason);
+  recovery_level_ = 3;
+  last_recovery_us_ = t_us;
 }
 
 NavOutput Navigator::output(uint64_t t_us) {
@@ -419,52 +836,79 @@ NavOutput Navigator::output(uint64_t t_us) {
   out.ranges_rejected = cycle_rejected_;
   cycle_used_ = 0;
   cycle_rejected_ = 0;
+  constexpr float kUnknownSigma_m = kNaNf;
+  out.pos_nav_m = Vec3f{kNaNf, kNaNf, kNaNf};
+  out.vel_nav_mps = Vec3f{kNaNf, kNaNf, kNaNf};
+  out.pos_sigma_m = Vec3f{kUnknownSigma_m, kUnknownSigma_m, kUnknownSigma_m};
+  out.vel_sigma_mps = out.pos_sigma_m;
+  out.heading_rad = kNaNf;
   if (!configured_) {
     out.status = NavStatus::kInvalid;
     return out;
   }
   if (phase_ == Phase::kRunning && !cv_mode_ && !imu_alive(t_us) && diff_us(t_us, t_state_us_) > 0 &&
       t_us - t_state_us_ > cfg_.imu_timeout_us) {
-    enter_cv_mode();
+    enter_cv_mode(NavMode::kUwbOnly);
   }
-  constexpr float kUnknownSigma_m = 1e3F;
   if (phase_ != Phase::kRunning) {
+    // No filter: never a position that is not an estimate (NaN, status says why).
     out.status = after_failure_ ? NavStatus::kInvalid : NavStatus::kInitialising;
-    if (have_fix_) out.pos_nav_m = to_vec3f(last_fix_origin_nav_m_);
-    out.pos_sigma_m = Vec3f{kUnknownSigma_m, kUnknownSigma_m, kUnknownSigma_m};
-    out.vel_sigma_mps = Vec3f{kUnknownSigma_m, kUnknownSigma_m, kUnknownSigma_m};
+    out.mode = NavMode::kNone;
     return out;
   }
   const NominalState& x = ekf_.state();
   const ErrCov& p = ekf_.cov();
   // Extrapolate to the output time (the state is at the last IMU sample or range).
   const Real dt = seconds(diff_us(t_us, t_state_us_));
-  const Real dt_c = std::fmin(std::fmax(dt, Real(-0.1)), Real(0.5));
+  // The IMU filter is at most one IMU interval old; the ranges-only model needs
+  // no sensor to move on and is extrapolated over any gap (a UWB outage), its
+  // covariance growing exactly as the constant-velocity prediction would.
+  const Real dt_c = cv_mode_ ? std::fmax(dt, Real(0)) : std::fmin(std::fmax(dt, Real(-0.1)), Real(0.5));
   const Vec3 pos = x.pos_nav_m + x.vel_nav_mps * dt_c;
   out.pos_nav_m = to_vec3f(pos);
   out.vel_nav_mps = to_vec3f(x.vel_nav_mps);
   for (int i = 0; i < 4; ++i) out.q_nav_body[i] = static_cast<float>(x.q_nav_body(i));
   Real var_p[3];
   for (int i = 0; i < 3; ++i) {
-    // Position variance at the output time: P_pp + 2 dt P_pv + dt^2 P_vv.
+    // Position variance at the output time: P_pp + 2 dt P_pv + dt^2 P_vv
+    // (plus, without a CV prediction since the last range, the CV process noise).
     var_p[i] = p(i, i) + Real(2) * dt_c * p(i, 3 + i) + dt_c * dt_c * p(3 + i, 3 + i);
+    if (cv_mode_ && dt_c > Real(0)) {
+      const Real q = cv_accel_psd(t_us);
+      var_p[i] += q * q * dt_c * dt_c * dt_c / Real(3);
+    }
     var_p[i] = std::fmax(var_p[i], Real(0));
+  }
+  Real cxy = p(0, 1) + dt_c * (p(0, 4) + p(3, 1)) + dt_c * dt_c * p(3, 4);
+  if (cv_mode_ && !cv_yaw_known_) {
+    // Heading unknown: the body origin lies anywhere on the circle of the
+    // horizontal lever arm about the tags' centroid (uniform azimuth).
+    Vec3 lev = ekf_.dcm() * mean_lever();
+    const Real lever_var = Real(0.5) * lev.head<2>().squaredNorm();
+    var_p[0] += lever_var;
+    var_p[1] += lever_var;
   }
   out.pos_sigma_m = Vec3f{static_cast<float>(std::sqrt(var_p[0])), static_cast<float>(std::sqrt(var_p[1])),
                           static_cast<float>(std::sqrt(var_p[2]))};
-  const Real cxy = p(0, 1) + dt_c * (p(0, 4) + p(3, 1)) + dt_c * dt_c * p(3, 4);
   const Real denom = std::sqrt(var_p[0] * var_p[1]);
   out.pos_xy_corr = denom > Real(0) ? static_cast<float>(std::fmin(std::fmax(cxy / denom, Real(-1)), Real(1))) : 0.0F;
   out.vel_sigma_mps = Vec3f{static_cast<float>(std::sqrt(p(3, 3))), static_cast<float>(std::sqrt(p(4, 4))),
                             static_cast<float>(std::sqrt(p(5, 5)))};
   out.heading_rad = static_cast<float>(quat_yaw(x.q_nav_body));
-  out.mode = cv_mode_ ? NavMode::kUwbOnly : NavMode::kInertial;
+  if (cv_mode_) {
+    out.mode = cv_reason_ == NavMode::kRecovering ? NavMode::kRecovering
+                                                  : (imu_alive(t_us) ? NavMode::kAligning : NavMode::kUwbOnly);
+  } else {
+    out.mode = NavMode::kInertial;
+  }
 
   const uint64_t last_uwb_us =
       diag_.last_range_used_t_us > running_since_us_ ? diag_.last_range_used_t_us : running_since_us_;
   const bool uwb_outage = diff_us(t_us, last_uwb_us) > static_cast<int64_t>(cfg_.uwb_timeout_us);
   const Real sigma_h = std::sqrt(var_p[0] + var_p[1]);
-  if (uwb_outage || cv_mode_ || !(sigma_h < cfg_.degraded_sigma)) {
+  // Nominal: the IMU filter, or the ranges-only filter on a vehicle without IMU.
+  const bool nominal_mode = out.mode == NavMode::kInertial || (out.mode == NavMode::kUwbOnly && !site_.has_imu);
+  if (uwb_outage || !nominal_mode || !(sigma_h < cfg_.degraded_sigma)) {
     out.status = NavStatus::kDegraded;
   } else {
     out.status = NavStatus::kValid;
@@ -480,9 +924,13 @@ NavOutput Navigator::output(uint64_t t_us) {
     NavOutput bad;
     bad.t_us = t_us;
     bad.status = NavStatus::kInvalid;
+    bad.mode = NavMode::kNone;
     bad.resets = diag_.resets;
-    bad.pos_sigma_m = Vec3f{kUnknownSigma_m, kUnknownSigma_m, kUnknownSigma_m};
-    bad.vel_sigma_mps = bad.pos_sigma_m;
+    bad.pos_nav_m = Vec3f{kNaNf, kNaNf, kNaNf};
+    bad.vel_nav_mps = bad.pos_nav_m;
+    bad.pos_sigma_m = bad.pos_nav_m;
+    bad.vel_sigma_mps = bad.pos_nav_m;
+    bad.heading_rad = kNaNf;
     return bad;
   }
   return out;

@@ -18,15 +18,28 @@
 namespace uwbnav {
 
 // Counters the console and CAN diagnostics read. Monotonic since start.
+// Recoveries escalate (docs/ekf.md "Recovery"): inflate -> re-anchor -> re-align;
+// only a non-finite or exploded state is reset, and output continues throughout.
 struct NavDiagnostics {
   uint32_t imu_samples = 0;
   uint32_t ranges_received = 0;
   uint32_t ranges_used = 0;
   uint32_t ranges_rejected = 0;
-  uint32_t resets = 0;           // covariance/state resets (non-finite, exploding)
-  uint32_t reinits = 0;          // re-initialisations after divergence
+  uint32_t resets = 0;           // hard resets: non-finite or exploded state (filter restarted)
+  uint32_t reinits = 0;          // re-alignments: the IMU filter re-acquires its heading (ranges-only output meanwhile)
+  uint32_t inflations = 0;       // divergence met by covariance inflation
+  uint32_t reanchors = 0;        // divergence met by re-anchoring position/velocity to the ranges
+  uint32_t integrity_fails = 0;  // integrity checks the filter failed (LS fix disagrees beyond chi-square)
+  uint32_t operator_resets = 0;  // reset() calls (console `reset filter`)
   uint64_t last_imu_t_us = 0;
   uint64_t last_range_used_t_us = 0;
+  float uwb_sigma_m = 0.0F;      // learned LOS ranging 1-sigma [m]
+};
+
+// The range-error state of one anchor, for the console and diagnostics.
+struct AnchorOffset {
+  float offset_m = kNaNf;        // estimated range offset (NaN: no slot lent) [m]
+  float sigma_m = kNaNf;         // its 1-sigma [m]
 };
 
 // Per-anchor view for the console `anchors` command and CAN diagnostics.
@@ -48,7 +61,7 @@ class Navigator {
  public:
   Navigator();
 
-  // Loads the site (anchors, tags, platform) and the parameters; clears state.
+  // Loads the site (anchors, tags, platform, calibration) and the parameters; clears state.
   [[nodiscard]] Status configure(const SiteConfig& site, const Params& params);
   // Applies changed parameter values live (console `param set`).
   void update_params(const Params& params);
@@ -66,16 +79,19 @@ class Navigator {
   const NavDiagnostics& diagnostics() const;
   size_t num_anchors() const;
   const AnchorStatus& anchor_status(size_t index) const;
+  // Range offset of anchor `index` (into SiteConfig::anchors) and the scale error.
+  AnchorOffset anchor_offset(size_t index) const;
+  float range_scale() const;
 
-  // Error-state size and access for the console `ekf` command.
+  // Inertial core of the error state for the console `ekf` command.
   static constexpr size_t kErrorStateSize = 15;
   void state_vector(float out[16]) const;   // p(3) v(3) q(4) ba(3) bg(3)
   void covariance_diagonal(float out[kErrorStateSize]) const;
   float covariance(size_t row, size_t col) const;
 
  private:
-  // Initialisation phases (docs/ekf.md): fix -> levelling/heading -> running.
-  enum class Phase : uint8_t { kWaitFix, kWaitHeading, kRunning };
+  // Initialisation phases (docs/ekf.md): no fix yet -> running (in a mode).
+  enum class Phase : uint8_t { kWaitFix, kRunning };
 
   // Parameter values in the estimator's types (refreshed by update_params).
   struct Config {
@@ -83,6 +99,15 @@ class Navigator {
     Real gyro_bias_init = Real(8.7e-3);
     Real accel_bias_init = Real(0.15);
     Real uwb_sigma_m = Real(0.1);
+    Real uwb_sigma_min_m = Real(0.05);
+    Real uwb_sigma_max_m = Real(1.0);
+    Real noise_window = Real(200);
+    bool learn_noise = true;
+    Real anchor_bias_sigma = Real(0.1);
+    Real tag_bias_sigma = Real(0.1);
+    Real scale_sigma = Real(0.003);
+    Real survey_sigma = Real(0.1);
+    Real bias_rw = Real(1e-3);
     uint64_t imu_timeout_us = 100000;
     uint64_t uwb_timeout_us = 1000000;
     bool ground_constraints = true;  // effective: param and Platform::kGround
@@ -95,6 +120,7 @@ class Navigator {
     Real origin_height = Real(0);
     uint64_t constraint_period_us = 100000;
     Real cv_accel_psd = Real(1);
+    Real cv_yaw_psd = Real(0.3);
     uint64_t init_window_us = 300000;
     Real init_heading_dist = Real(3);
     uint64_t init_heading_timeout_us = 30000000;
@@ -102,12 +128,13 @@ class Navigator {
     Real diverge_nis = Real(25);
     Real diverge_fraction = Real(0.8);
     uint64_t diverge_window_us = 4000000;
+    uint64_t recover_memory_us = 20000000;
     Real degraded_sigma = Real(1);
     Real init_speed = Real(1);
     Real init_yaw_sigma = Real(0.12);
   };
 
-  // Latest range per anchor/tag pair (initial fix).
+  // Latest range per anchor/tag pair (LS fixes).
   struct PairRange {
     uint64_t t_us = 0;
     float range_m = 0.0F;
@@ -118,41 +145,57 @@ class Navigator {
     uint64_t t_us = 0;
     Vec3 tag_pos_nav_m = Vec3::Zero();
     Real sigma_h_m = Real(0);   // horizontal 1-sigma of the fix [m]
+    Real sigma_v_m = Real(-1);  // vertical 1-sigma [m], negative for a 2-D fix
     Real yaw_rel_rad = Real(0); // gyro-integrated yaw of the levelled attitude at t_us
     int tag_index = -1;
   };
-  static constexpr size_t kTrackCapacity = 64;
-  static constexpr size_t kMonitorCapacity = 128;
+  // An anchor-offset state slot lent to an anchor (ErrIdx::kAnchorBias + slot).
+  struct BiasSlot {
+    int anchor_index = -1;          // -1: free
+    uint64_t last_t_us = 0;         // last range of the anchor [us]
+  };
+  static constexpr size_t kTrackCapacity = 32;   // 6.4 s of 5 Hz track: the heading's first metres
+  static constexpr size_t kMonitorCapacity = 64;
 
   // navigator_init.cpp
   void restart(bool counted_reset);
   void init_on_imu(const ImuSample& imu);
-  void init_on_range(int anchor_index, int tag_index, const UwbRange& range);
   bool init_track(int anchor_index, int tag_index, const UwbRange& range);
   void begin_imu_recovery();
   bool try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix);
   void try_heading(uint64_t t_us);
   bool track_moving(uint64_t t_us) const;
-  void start_filter(uint64_t t_us, const TrackFix& fix, Real yaw_rad, Real yaw_sigma_rad, const Vec3& vel_nav_mps,
-                    Real vel_sigma_mps);
-  void start_filter_at(uint64_t t_us, const Vec3& pos_nav_m, const Vec3& pos_sigma_m, Real yaw_rad,
-                       Real yaw_sigma_rad, const Vec3& vel_nav_mps, const Vec3& vel_sigma_mps);
+  bool imu_still(uint64_t t_us);
+  void start_filter(uint64_t t_us, Real yaw_rad, Real yaw_sigma_rad);
   void yaw_bank_on_range(int anchor_index, int tag_index, const UwbRange& range);
-  void start_from_yaw_bank(uint64_t t_us, Real max_yaw_sigma_rad);
   YawGsf::Noise yaw_bank_noise() const;
   Status robust_ls_fix(LsRange* ranges, size_t n, const LsOptions& opt, LsFix& ls) const;
   void setup_height(Real origin_z_m);
-  void start_cv_filter(uint64_t t_us, const TrackFix& fix);
+  void start_cv_filter(uint64_t t_us, const TrackFix& fix, NavMode reason);
+  void align_in_background(int anchor_index, int tag_index, const UwbRange& range);
+  void cv_set_yaw(Real yaw_rad, Real yaw_sigma_rad);
+  void cv_forget_yaw();
 
   // navigator.cpp
   bool imu_alive(uint64_t t_us) const;
+  Real cv_accel_psd(uint64_t t_us) const;
   void track_imu_noise(const Vec3& accel_body_mps2, const Vec3& gyro_body_radps, Real dt_s);
-  void enter_cv_mode();
+  void enter_cv_mode(NavMode reason);
   void apply_constraints(uint64_t t_us);
   bool fuse(const ScalarObs& obs);
-  void check_health(bool symmetrise = true);
+  void check_health(bool after_predict = true);
   void monitor_divergence(uint64_t t_us, Real nis);
+  void recover(uint64_t t_us, uint8_t min_level = 1);
+  void integrity_check(uint64_t t_us, int tag_index);
   Vec3 lever(int tag_index) const;
+  Vec3 model_lever(int tag_index) const;
+  Vec3 mean_lever() const;
+  int lend_bias_slot(int anchor_index, uint64_t t_us);
+  void range_error_process_noise(int slot, int anchor_index, int tag_index, uint64_t t_us, const Vec3& tag_pos_nav_m);
+  void learn_noise(int anchor_index, int tag_index, uint64_t t_us, Real innovation, Real hph, bool fused);
+  Real anchor_bias_prior_var() const;
+  Real tag_bias_prior_var() const;
+  Real known_offset_m(int anchor_index, int tag_index) const;
 
   SiteConfig site_;
   Params params_;
@@ -166,7 +209,10 @@ class Navigator {
 
   Phase phase_ = Phase::kWaitFix;
   bool after_failure_ = false;   // status invalid (not initialising) until running again
-  bool cv_mode_ = false;         // running on the constant-velocity model (no IMU)
+  bool cv_mode_ = false;         // running on the constant-velocity model (ranges only)
+  NavMode cv_reason_ = NavMode::kUwbOnly;  // why (kUwbOnly, kAligning, kRecovering)
+  bool cv_yaw_known_ = false;    // constant-velocity mode: heading estimated (lever arms modelled)
+  bool cv_rest_latched_ = false; // constant-velocity mode: rest confirmed and the IMU still since
   bool planar_ = false;          // anchors near-planar: 2-D fix, height constraint (auto)
   bool height_on_ = false;
   Real height_ref_m_ = Real(0);  // body-origin height held by the constraint [m]
@@ -174,6 +220,28 @@ class Navigator {
   uint64_t t_state_us_ = 0;      // time of the filter state [us]
   uint64_t running_since_us_ = 0;  // time the filter (re)started [us]
   uint64_t last_constraint_us_ = 0;
+  uint64_t last_level_check_us_ = 0;  // levelling / rest judged at the constraint rate while not inertial
+
+  // Range errors: anchor-offset slots, tag-offset time, learned ranging noise.
+  BiasSlot slots_[kBiasSlots];
+  int8_t anchor_slot_[kMaxAnchors];  // slot lent to each anchor, -1: none
+  uint64_t tag_bias_t_us_[kMaxTags] = {};
+  Real r_los_m2_ = Real(0.01);   // learned LOS ranging variance [m^2]
+  Real r_diff_m2_ = Real(0.01);  // differenced estimate [m^2]
+  Real r_sh_m2_ = Real(0.01);    // Sage-Husa estimate [m^2]
+  Real r_count_ = Real(0);       // samples of the differenced estimate (saturates at the window)
+  Real r_sh_count_ = Real(0);    // samples of the Sage-Husa estimate
+  // Per anchor/tag pair: the previous innovation, for the differenced noise estimate.
+  struct PrevInnovation {
+    uint64_t t_us = 0;
+    float innovation_m = 0.0F;
+  };
+  PrevInnovation prev_innov_[kMaxAnchors][kMaxTags];
+
+  // Recovery ladder and the integrity check.
+  uint64_t last_integrity_us_ = 0;
+  uint64_t last_recovery_us_ = 0;
+  uint8_t recovery_level_ = 0;   // 0 none, 1 inflated, 2 re-anchored (escalates within recover_memory)
 
   bool have_prev_imu_ = false;
   ImuSample prev_imu_;
@@ -187,26 +255,27 @@ class Navigator {
   ImuNoise imu_eff_;                 // densities used: max(parameter, measured floor)
   Vec3 last_gyro_body_radps_ = Vec3::Zero();
 
-  // Initialisation state.
+  // Initialisation / alignment state.
   PairRange pair_[kMaxAnchors][kMaxTags];
   uint64_t first_range_t_us_ = 0;
   uint64_t first_imu_t_us_ = 0;
-  uint64_t last_fix_attempt_us_ = 0;
-  uint64_t window_us_ = 0;        // current (growing) fix window
-  uint64_t window_grow_t_us_ = 0;
   bool levelled_ = false;
   bool levelled_at_rest_ = false;
   Quat q_init_ = Quat(1, 0, 0, 0);  // levelled attitude, yaw relative to the unknown start yaw
   Vec3 bg_init_ = Vec3::Zero();
+  Vec3 ba_init_ = Vec3::Zero();     // accelerometer bias carried over a re-alignment [m/s^2]
+  Real accel_h_ms_ = Real(0);
+  Vec3 rest_ref_body_mps2_ = Vec3::Zero();  // specific force when rest was confirmed (body) [m/s^2]
+  bool rest_ref_valid_ = false;       // EMA of the squared horizontal specific force, levelled frame [(m/s^2)^2]
   TrackFix track_[kTrackCapacity];
   size_t track_head_ = 0;
   size_t track_count_ = 0;
   TrackFix last_fix_per_tag_[kMaxTags];
-  Real last_fix_sigma_z_m_ = Real(1);  // vertical 1-sigma of the latest fix [m]
+  uint64_t last_fix_try_us_[kMaxTags] = {};  // last LS fix attempt per tag (track at ~10 Hz)
   uint64_t heading_wait_since_us_ = 0;
   bool have_fix_ = false;
-  Vec3 last_fix_origin_nav_m_ = Vec3::Zero();  // output while initialising
   YawGsf gsf_;                    // yaw hypotheses while no heading source has answered
+  uint64_t gsf_last_update_us_ = 0;  // last range that updated the yaw bank
 
   // Per anchor/tag pair: filter tag position at the previous range (gating context).
   Vec3 prev_tag_pos_[kMaxAnchors][kMaxTags];

@@ -1,7 +1,9 @@
-// Navigator initialisation without truth: LS-Taylor fix from the first ranges
-// (seed 003 eq. 1-4; 2-D for planar anchor layouts), levelling and gyro bias
-// from a rest period, heading from the first metres of UWB track (ground) or
-// from two tags, constant-velocity start when there is no IMU.
+// Navigator start-up and alignment without truth: LS-Taylor fix from the first
+// ranges (seed 003 eq. 1-4; 2-D for planar anchor layouts) starts the
+// ranges-only (constant-velocity) filter at once, so a solution is published
+// from the first fix; levelling, heading (two tags, UWB track chords, yaw bank)
+// are acquired in the background and hand the same filter over to the IMU
+// model, keeping position, velocity and the range-error states.
 #include <cmath>
 
 #include "estimator/navigator.hpp"
@@ -9,22 +11,29 @@
 namespace uwbnav {
 namespace {
 
-constexpr uint64_t kMaxWindowUs = 10000000;       // fix window growth limit [us]
+constexpr uint64_t kMaxWindowUs = 10000000;       // LS fix: oldest range used [us]
+constexpr Real kWindowSpanFactor = Real(1.5);      // LS fix: window = this x the span of the newest needed ranges
 constexpr uint64_t kLevelWithoutRestUs = 3000000;  // level from the mean specific force after this [us]
 constexpr uint64_t kTwoTagSyncUs = 200000;        // two-tag fixes closer than this pair up [us]
 constexpr uint64_t kTrackMaxSpanUs = 20000000;    // heading chord: longest time span [us]
 constexpr Real kMinChord_m = Real(0.5);            // heading: shortest chord of the LS track [m]
+constexpr Real kChordMinSpeed_mps = Real(1);       // heading: the ranges-only filter must see at least this speed [m/s]
 constexpr Real kMaxChordSpreadRad = Real(0.35);    // heading: largest disagreement between chords [rad]
 constexpr Real kMinBaseline_m = Real(0.3);         // two-tag heading: shortest horizontal baseline [m]
 constexpr Real kWeakHeightFactor = Real(5);        // auto height mode, non-planar anchors: sigma multiplier
-constexpr uint64_t kTrackSpacingUs = 100000;      // track: shortest interval between stored fixes [us]
+constexpr uint64_t kTrackSpacingUs = 200000;      // track: shortest interval between stored fixes (5 Hz) [us]
 constexpr uint64_t kTrackFreshUs = 1000000;       // rest check: LS track span looked at [us]
 constexpr Real kRestTrackDist_m = Real(0.1);       // rest check: allowed track motion beyond noise [m]
+constexpr uint64_t kYawBankMinIntervalUs = 25000;  // yaw bank: shortest interval between range updates [us]
 constexpr int kYawBankMinUpdates = 10;             // yaw bank: fewest ranges before it may start the filter
 constexpr Real kYawBankCorrTime_s = Real(1);       // yaw bank: correlation time turning bias/tilt into white noise [s]
 constexpr Real kTiltSigmaRest_rad = Real(0.01);    // tilt 1-sigma after levelling at rest [rad]
 constexpr Real kTiltSigmaMoving_rad = Real(0.05);  // tilt 1-sigma when levelled on the move [rad]
 constexpr Real kMaxLinearYawSigma_rad = Real(0.5); // largest yaw 1-sigma the IMU filter is started with
+constexpr Real kAccelEmaTau_s = Real(0.5);
+constexpr Real kRestMaxForceChange_mps2 = Real(0.1);  // rest: largest change of the mean specific force [m/s^2]         // horizontal acceleration EMA time constant [s]
+constexpr Real kCvStartVelSigma_mps = Real(2);     // ranges-only start: horizontal velocity 1-sigma [m/s]
+constexpr Real kCvStartVelSigmaV_mps = Real(0.5);  // ... vertical [m/s]
 
 // Chi-square acceptance of an LS fix with dof degrees of freedom (~99.9 % for small dof).
 bool ls_consistent(const LsFix& ls) {
@@ -41,29 +50,38 @@ void Navigator::restart(bool counted_reset) {
   }
   phase_ = Phase::kWaitFix;
   cv_mode_ = false;
+  cv_yaw_known_ = false;
   height_on_ = false;
   levelled_ = false;
   levelled_at_rest_ = false;
   q_init_ = Quat(1, 0, 0, 0);
   bg_init_.setZero();
-  for (auto& row : pair_) {
-    for (auto& p : row) p = PairRange{};
-  }
+  ba_init_.setZero();
+  accel_h_ms_ = Real(0);
+  rest_ref_valid_ = false;
+  // The latest ranges per pair are kept: the next range can fix again at once.
   for (auto& row : prev_tag_valid_) {
     for (auto& v : row) v = false;
   }
   for (auto& f : last_fix_per_tag_) f = TrackFix{};
+  for (auto& t : last_fix_try_us_) t = 0;
+  gsf_last_update_us_ = 0;
   track_head_ = 0;
   track_count_ = 0;
   monitor_head_ = 0;
   monitor_count_ = 0;
-  first_range_t_us_ = 0;
   first_imu_t_us_ = 0;
-  window_us_ = cfg_.init_window_us;
-  window_grow_t_us_ = 0;
   heading_wait_since_us_ = 0;
   last_constraint_us_ = 0;
+  last_level_check_us_ = 0;
+  recovery_level_ = 0;
   have_fix_ = false;
+  for (auto& s : slots_) s = BiasSlot{};
+  for (auto& a : anchor_slot_) a = -1;
+  for (auto& t : tag_bias_t_us_) t = 0;
+  for (auto& row : prev_innov_) {
+    for (auto& v : row) v = PrevInnovation{};
+  }
   gating_.reset();
   gsf_.reset();
   ekf_.init(NominalState{}, ErrVec::Ones());
@@ -80,14 +98,19 @@ void Navigator::init_on_imu(const ImuSample& imu) {
       gsf_.accumulate(quat_to_dcm(quat_mul(q_init_, quat_exp(Real(0.5) * dtheta))) * f_mean, dt);
     }
     q_init_ = quat_normalised(quat_mul(q_init_, quat_exp(dtheta)));
+    // Horizontal acceleration (levelled frame) for the ranges-only model's noise.
+    const Vec3 f_lvl = quat_to_dcm(q_init_) * to_vec3(imu.accel_body_mps2);
+    const Real a = std::fmin(dt / kAccelEmaTau_s, Real(1));
+    accel_h_ms_ += a * (f_lvl.head<2>().squaredNorm() - accel_h_ms_);
   }
   // Judge rest at the constraint rate (O(window) each time).
-  if (imu.t_us - last_constraint_us_ < cfg_.constraint_period_us) return;
-  last_constraint_us_ = imu.t_us;
+  if (imu.t_us - last_level_check_us_ < cfg_.constraint_period_us) return;
+  last_level_check_us_ = imu.t_us;
   rest_.evaluate();
   // The IMU alone cannot tell rest from constant velocity or constant
-  // acceleration: the UWB track must agree that the vehicle stands still.
-  if (rest_.at_rest() && !track_moving(imu.t_us)) {
+  // acceleration: the UWB track must agree that the vehicle stands still,
+  // and the specific force must not have moved since rest was confirmed.
+  if (imu_still(imu.t_us)) {
     // Levelling (roll, pitch) and gyro bias from the rest window; keep the relative yaw.
     const Real yaw_rel = levelled_ ? quat_yaw(q_init_) : Real(0);
     q_init_ = quat_mul(quat_from_yaw(yaw_rel), quat_level(rest_.accel_mean()));
@@ -99,6 +122,27 @@ void Navigator::init_on_imu(const ImuSample& imu) {
     q_init_ = quat_level(rest_.accel_mean());  // never at rest: mean specific force as vertical
     levelled_ = true;
   }
+}
+
+bool Navigator::imu_still(uint64_t t_us) {
+  // At rest the body frame does not turn, so the specific force measured in it
+  // is constant: rest is confirmed once by a quiet IMU window and an LS track
+  // that does not move, then held while the window mean stays within
+  // kRestMaxHorizAccel of the force at confirmation. A smooth pull-away keeps
+  // the IMU window quiet and would otherwise be levelled away as tilt; heavy
+  // NLOS makes the track jump and cannot end a confirmed rest. Call after
+  // rest_.evaluate().
+  if (!rest_.at_rest()) {
+    rest_ref_valid_ = false;
+    return false;
+  }
+  if (!rest_ref_valid_) {
+    if (track_moving(t_us)) return false;
+    rest_ref_body_mps2_ = rest_.accel_mean();
+    rest_ref_valid_ = true;
+    return true;
+  }
+  return (rest_.accel_mean() - rest_ref_body_mps2_).norm() < kRestMaxForceChange_mps2;
 }
 
 bool Navigator::track_moving(uint64_t t_us) const {
@@ -117,18 +161,41 @@ bool Navigator::track_moving(uint64_t t_us) const {
 }
 
 bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix) {
+  // The latest range of each anchor, youngest first (n <= kMaxAnchors).
   LsRange ranges[kMaxAnchors];
+  uint64_t age_us[kMaxAnchors];
   size_t n = 0;
-  const Real sigma = cfg_.uwb_sigma_m;
   for (size_t a = 0; a < site_.num_anchors; ++a) {
     const PairRange& pr = pair_[a][tag_index];
-    if (!pr.valid || t_us - pr.t_us > window_us_) continue;
-    const Real age_s = static_cast<Real>(t_us - pr.t_us) * Real(1e-6);
-    const Real smear = cfg_.init_speed * age_s;
-    ranges[n].anchor_pos_nav_m = site_.anchors[a].pos_nav_m;
-    ranges[n].range_m = pr.range_m;
-    ranges[n].sigma_m = static_cast<float>(std::sqrt(sigma * sigma + smear * smear));
-    ++n;
+    if (!pr.valid || t_us < pr.t_us || t_us - pr.t_us > kMaxWindowUs) continue;
+    size_t k = n++;
+    while (k > 0 && age_us[k - 1] > t_us - pr.t_us) {
+      ranges[k] = ranges[k - 1];
+      age_us[k] = age_us[k - 1];
+      --k;
+    }
+    age_us[k] = t_us - pr.t_us;
+    ranges[k].anchor_pos_nav_m = site_.anchors[a].pos_nav_m;
+    ranges[k].range_m = pr.range_m - static_cast<float>(known_offset_m(static_cast<int>(a), tag_index));
+  }
+  // Window: the span of the newest ranges a fix needs, with some margin (sparse
+  // ranging takes seconds to hear enough anchors; dense ranging a few ms).
+  const size_t needed = planar_ ? 3 : 4;
+  if (n < 3) return false;
+  const uint64_t span_us = age_us[(n < needed ? n : needed) - 1];
+  // Ages are below kMaxWindowUs (10 s): through uint32_t, no soft-double conversion on the M4F.
+  uint64_t window_us =
+      static_cast<uint32_t>(kWindowSpanFactor * static_cast<Real>(static_cast<uint32_t>(span_us)));
+  if (window_us < cfg_.init_window_us) window_us = cfg_.init_window_us;
+  const Real sigma = std::sqrt(r_los_m2_);
+  size_t m = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (age_us[i] > window_us) break;
+    // A range taken earlier saw the vehicle elsewhere: inflate by speed x age.
+    const Real smear = cfg_.init_speed * static_cast<Real>(static_cast<uint32_t>(age_us[i])) * Real(1e-6);
+    ranges[m] = ranges[i];
+    ranges[m].sigma_m = static_cast<float>(std::sqrt(sigma * sigma + smear * smear + anchor_bias_prior_var()));
+    ++m;
   }
   const Vec3 lev = lever(tag_index);
   const Vec3 lever_level = quat_to_dcm(q_init_) * lev;  // yaw does not change the vertical part
@@ -139,18 +206,18 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix) {
   // when the 3-D geometry is singular - never as a way around a 3-D fix that
   // failed its own consistency test (the height assumption would absorb it).
   Status st = Status::kSingular;
-  if (!planar_ && n >= 4) st = robust_ls_fix(ranges, n, opt, ls);
-  if (st != Status::kOk && st != Status::kRejected && n >= 3) {
+  if (!planar_ && m >= 4) st = robust_ls_fix(ranges, m, opt, ls);
+  if (st != Status::kOk && st != Status::kRejected && m >= 3) {
     opt.two_d = true;
-    st = robust_ls_fix(ranges, n, opt, ls);
+    st = robust_ls_fix(ranges, m, opt, ls);
   }
   if (st != Status::kOk) return false;
   fix.t_us = t_us;
   fix.tag_pos_nav_m = to_vec3(ls.pos_nav_m);
   fix.sigma_h_m = std::sqrt(static_cast<Real>(ls.cov_nav_m2[0][0] + ls.cov_nav_m2[1][1]));
+  fix.sigma_v_m = opt.two_d ? Real(-1) : std::sqrt(static_cast<Real>(ls.cov_nav_m2[2][2]));
   fix.yaw_rel_rad = quat_yaw(q_init_);
   fix.tag_index = tag_index;
-  last_fix_sigma_z_m_ = opt.two_d ? Real(-1) : std::sqrt(static_cast<Real>(ls.cov_nav_m2[2][2]));
   return std::isfinite(fix.sigma_h_m);
 }
 
@@ -190,20 +257,16 @@ Status Navigator::robust_ls_fix(LsRange* ranges, size_t n, const LsOptions& opt,
 
 bool Navigator::init_track(int anchor_index, int tag_index, const UwbRange& range) {
   const uint64_t t = range.t_us;
-  pair_[anchor_index][tag_index] = PairRange{t, range.range_m, true};
-  if (first_range_t_us_ == 0) {
-    first_range_t_us_ = t;
-    window_grow_t_us_ = t;
-  }
-  // Sparse ranging: widen the collection window while no fix comes (up to 10 s).
-  if (!have_fix_ && t - window_grow_t_us_ > 2 * window_us_ && window_us_ < kMaxWindowUs) {
-    window_us_ = window_us_ * 2 < kMaxWindowUs ? window_us_ * 2 : kMaxWindowUs;
-    window_grow_t_us_ = t;
-  }
+  if (first_range_t_us_ == 0) first_range_t_us_ = t;
+  // The track is kept at ~10 Hz: a fix per range would cost an LS solve per
+  // range while aligning (the worst 10 ms cycle on the M4F).
+  uint64_t& last_try = last_fix_try_us_[tag_index];
+  if (have_fix_ && last_try != 0 && t >= last_try && t - last_try < kTrackSpacingUs) return false;
+  last_try = t;
   TrackFix fix;
   if (!try_ls_fix(t, tag_index, fix)) return false;
+  (void)anchor_index;
   have_fix_ = true;
-  last_fix_origin_nav_m_ = fix.tag_pos_nav_m - quat_to_dcm(q_init_) * lever(tag_index);
   // Thin the track to ~10 Hz so the ring spans the first metres even when slow.
   const TrackFix& prev = track_[(track_head_ + kTrackCapacity - 1) % kTrackCapacity];
   if (track_count_ == 0 || fix.t_us - prev.t_us >= kTrackSpacingUs || prev.tag_index != fix.tag_index) {
@@ -220,44 +283,37 @@ void Navigator::begin_imu_recovery() {
   levelled_at_rest_ = false;
   q_init_ = Quat(1, 0, 0, 0);
   bg_init_.setZero();
+  ba_init_.setZero();
   track_head_ = 0;
   track_count_ = 0;
   for (auto& f : last_fix_per_tag_) f = TrackFix{};
   first_imu_t_us_ = 0;
+  heading_wait_since_us_ = 0;
   gsf_.reset();
+  if (cv_mode_ && cv_reason_ == NavMode::kUwbOnly) cv_reason_ = NavMode::kAligning;
 }
 
-void Navigator::init_on_range(int anchor_index, int tag_index, const UwbRange& range) {
+void Navigator::align_in_background(int anchor_index, int tag_index, const UwbRange& range) {
+  // While the ranges-only filter publishes, the IMU filter is prepared: LS track,
+  // levelling (init_on_imu), then a heading from two tags, the track chords
+  // (ground) or the yaw bank. Whichever answers first hands the filter over.
   const uint64_t t = range.t_us;
   const bool got_fix = init_track(anchor_index, tag_index, range);
-  if (!have_fix_) return;
-  const TrackFix& fix = track_[(track_head_ + kTrackCapacity - 1) % kTrackCapacity];
-
-  const bool imu_now = imu_alive(t);
-  const bool imu_expected = site_.has_imu && t - first_range_t_us_ <= cfg_.imu_timeout_us;
-  if (!imu_now && !imu_expected) {
-    if (got_fix) start_cv_filter(t, fix);
-    return;
-  }
-  if (!imu_now || !levelled_) return;
-  if (phase_ == Phase::kWaitFix) {
-    phase_ = Phase::kWaitHeading;
-    heading_wait_since_us_ = t;
-  }
+  if (!levelled_) return;
+  if (heading_wait_since_us_ == 0) heading_wait_since_us_ = t;
   if (got_fix) try_heading(t);
-  if (phase_ == Phase::kWaitHeading) yaw_bank_on_range(anchor_index, tag_index, range);
-  if (phase_ == Phase::kWaitHeading && t - heading_wait_since_us_ > cfg_.init_heading_timeout_us) {
-    // No heading yet. With a yaw the linearisation can carry, start the IMU
-    // filter from the bank; otherwise an IMU filter would integrate the
-    // specific force in an unknown direction and claim a covariance its
-    // linearisation cannot honour: run on ranges alone (constant velocity,
-    // degraded) while the bank keeps listening, and switch when it converges.
-    const TrackFix& newest = track_[(track_head_ + kTrackCapacity - 1) % kTrackCapacity];
-    if (gsf_.active() && gsf_.yaw_sigma() < kMaxLinearYawSigma_rad) {
-      start_from_yaw_bank(t, kMaxLinearYawSigma_rad);
-    } else {
-      start_cv_filter(t, newest);
-    }
+  if (!cv_mode_) return;
+  yaw_bank_on_range(anchor_index, tag_index, range);
+  if (!cv_mode_) return;
+  // Ground vehicles only: an air platform keeps publishing the ranges-only
+  // solution until its yaw bank is confident (measured on the real PX4 drone of
+  // miluv: an IMU filter started with a 0.5 rad yaw at 0.8 ranges/s diverged
+  // to 100 m within 30 s, while the ranges-only solution stayed within 2 m).
+  if (site_.platform == Platform::kGround && t - heading_wait_since_us_ > cfg_.init_heading_timeout_us && gsf_.active() &&
+      gsf_.updates() >= kYawBankMinUpdates && gsf_.yaw_sigma() < kMaxLinearYawSigma_rad) {
+    // No heading source answered in time: a yaw the linearisation can carry is enough.
+    const Real yaw_sigma = std::fmin(std::fmax(gsf_.yaw_sigma(), Real(0.02)), kMaxLinearYawSigma_rad);
+    start_filter(t, gsf_.yaw_mean(), yaw_sigma);
   }
 }
 
@@ -282,15 +338,24 @@ void Navigator::yaw_bank_on_range(int anchor_index, int tag_index, const UwbRang
     // Seed at the newest fix (this range is part of it).
     const TrackFix& fix = track_[(track_head_ + kTrackCapacity - 1) % kTrackCapacity];
     const bool ground = site_.platform == Platform::kGround;
-    const Real pos_v = last_fix_sigma_z_m_ > Real(0) ? last_fix_sigma_z_m_ : (ground ? Real(0.2) : Real(1.0));
+    const Real pos_v = fix.sigma_v_m > Real(0) ? fix.sigma_v_m : (ground ? Real(0.2) : Real(1.0));
     const Real vel_sigma = levelled_at_rest_ && !track_moving(range.t_us) ? Real(0.2) : cfg_.init_speed;
     gsf_.start(fix.tag_pos_nav_m, c_lvl * lever(fix.tag_index), Real(0),
                fix.sigma_h_m * std::sqrt(Real(0.5)) + Real(0.05), pos_v, std::fmax(vel_sigma, Real(0.2)));
     return;
   }
+  // At most one bank update per kYawBankMinIntervalUs: eight small EKFs per
+  // range would dominate a 10 ms cycle with dense ranging (measured on the
+  // M4F), and the heading needs geometry over seconds, not every range.
+  if (gsf_last_update_us_ != 0 && range.t_us >= gsf_last_update_us_ &&
+      range.t_us - gsf_last_update_us_ < kYawBankMinIntervalUs) {
+    return;
+  }
+  gsf_last_update_us_ = range.t_us;
   gsf_.propagate(static_cast<Real>(site_.gravity_mps2), yaw_bank_noise());
-  if (!gsf_.update_range(to_vec3(site_.anchors[anchor_index].pos_nav_m), c_lvl * lever(tag_index),
-                         static_cast<Real>(range.range_m), cfg_.uwb_sigma_m)) {
+  const Real range_m = static_cast<Real>(range.range_m) - known_offset_m(anchor_index, tag_index);
+  const Real sigma = std::sqrt(r_los_m2_ + anchor_bias_prior_var() + tag_bias_prior_var());
+  if (!gsf_.update_range(to_vec3(site_.anchors[anchor_index].pos_nav_m), c_lvl * lever(tag_index), range_m, sigma)) {
     return;
   }
   // Ground vehicles get their heading from the track (try_heading), which is
@@ -299,15 +364,8 @@ void Navigator::yaw_bank_on_range(int anchor_index, int tag_index, const UwbRang
   // the ground it is only the fallback after the heading timeout.
   const bool bank_may_start = site_.platform == Platform::kAir;
   if (bank_may_start && gsf_.updates() >= kYawBankMinUpdates && gsf_.yaw_sigma() < cfg_.init_yaw_sigma) {
-    start_from_yaw_bank(range.t_us, cfg_.init_yaw_sigma);
+    start_filter(range.t_us, gsf_.yaw_mean(), std::fmax(gsf_.yaw_sigma(), Real(0.02)));
   }
-}
-
-void Navigator::start_from_yaw_bank(uint64_t t_us, Real max_yaw_sigma_rad) {
-  Vec3 pos, pos_sigma, vel, vel_sigma;
-  gsf_.mixture(pos, pos_sigma, vel, vel_sigma);
-  const Real yaw_sigma = std::fmin(std::fmax(gsf_.yaw_sigma(), Real(0.02)), max_yaw_sigma_rad);
-  start_filter_at(t_us, pos, pos_sigma, gsf_.yaw_mean(), yaw_sigma, vel, vel_sigma);
 }
 
 void Navigator::try_heading(uint64_t t_us) {
@@ -323,22 +381,35 @@ void Navigator::try_heading(uint64_t t_us) {
       const Vec3 b_rel = quat_to_dcm(q_init_) * (lever(static_cast<int>(j)) - lever(static_cast<int>(i)));
       const Real len = b_rel.head<2>().norm();
       const Real sig = std::sqrt(fi.sigma_h_m * fi.sigma_h_m + fj.sigma_h_m * fj.sigma_h_m);
-      if (len < kMinBaseline_m || len < Real(4) * sig) continue;
       const Real yaw0 = wrap_pi(std::atan2(b_nav.y(), b_nav.x()) - std::atan2(b_rel.y(), b_rel.x()));
-      start_filter(t_us, fj, yaw0, std::atan2(Real(2) * sig, len) + Real(0.02), Vec3::Zero(),
-                   levelled_at_rest_ ? Real(0.2) : Real(1));
-      return;
+      const Real yaw_sigma = std::atan2(Real(2) * sig, len) + Real(0.02);
+      if (levelled_ && imu_alive(t_us)) {
+        if (len < kMinBaseline_m || len < Real(4) * sig) continue;
+        start_filter(t_us, yaw0, yaw_sigma);
+        return;
+      }
+      // Without IMU the ranges-only filter then carries the heading itself.
+      if (cv_mode_ && !cv_yaw_known_ && len >= kMinBaseline_m && len >= Real(4) * sig) {
+        cv_set_yaw(wrap_pi(yaw0 + quat_yaw(q_init_)), yaw_sigma);
+        return;
+      }
     }
   }
   // (b) Ground vehicles move forward: each chord of the LS track points along
   // the body x axis at mid-chord, whose gyro-relative yaw is known; the
   // length-weighted circular mean of (chord direction - relative yaw) over the
   // first metres is the start yaw. Works on curved tracks too.
-  if (site_.platform != Platform::kGround || track_count_ < 2) return;
+  if (site_.platform != Platform::kGround || track_count_ < 2 || !levelled_) return;
+  // Only while the ranges-only filter sees the vehicle drive: at rest, NLOS
+  // jumps of the LS track look like chords too.
+  if (cv_mode_) {
+    const Real speed = ekf_.state().vel_nav_mps.head<2>().norm();
+    const Real speed_sigma = std::sqrt(ekf_.cov()(ErrIdx::kVel, ErrIdx::kVel) + ekf_.cov()(ErrIdx::kVel + 1, ErrIdx::kVel + 1));
+    if (!(speed > kChordMinSpeed_mps && speed > Real(2) * speed_sigma)) return;
+  }
   const size_t newest = (track_head_ + kTrackCapacity - 1) % kTrackCapacity;
   const TrackFix& fn = track_[newest];
   const TrackFix* end = &fn;  // end of the chord being built (walking back in time)
-  const TrackFix* fv = nullptr;  // >= 0.5 s older than the newest: velocity chord
   Real sum_c = Real(0), sum_s = Real(0), length = Real(0), sig_sum = Real(0);
   Real est_min = Real(10), est_max = Real(-10), first_est = Real(0);
   int chords = 0;
@@ -346,7 +417,6 @@ void Navigator::try_heading(uint64_t t_us) {
     const TrackFix& f = track_[(newest + kTrackCapacity - k) % kTrackCapacity];
     if (f.tag_index != fn.tag_index) continue;
     if (fn.t_us - f.t_us > kTrackMaxSpanUs) break;
-    if (fv == nullptr && fn.t_us - f.t_us >= 500000) fv = &f;
     const Vec3 chord = end->tag_pos_nav_m - f.tag_pos_nav_m;
     const Real d = chord.head<2>().norm();
     const Real sig = std::sqrt(end->sigma_h_m * end->sigma_h_m + f.sigma_h_m * f.sigma_h_m);
@@ -365,20 +435,15 @@ void Navigator::try_heading(uint64_t t_us) {
     ++chords;
     end = &f;
   }
-  if (length < cfg_.init_heading_dist || fv == nullptr || chords == 0) return;
+  if (length < cfg_.init_heading_dist || chords == 0) return;
   // Chords disagreeing by more than this are not forward driving (reversing, sliding).
   if (est_max - est_min > kMaxChordSpreadRad) return;
   const Real yaw0 = wrap_pi(std::atan2(sum_s, sum_c));
-  const Real dt_v = static_cast<Real>(fn.t_us - fv->t_us) * Real(1e-6);
-  Vec3 vel = (fn.tag_pos_nav_m - fv->tag_pos_nav_m) / dt_v;
-  vel.z() = Real(0);
-  const Real vel_sigma =
-      Real(0.3) + Real(2) * std::sqrt(fn.sigma_h_m * fn.sigma_h_m + fv->sigma_h_m * fv->sigma_h_m) / dt_v;
   // Yaw: chord direction noise, side slip allowance and the chords' spread.
   const Real yaw_sigma = std::atan2(Real(2) * sig_sum / static_cast<Real>(chords), length / static_cast<Real>(chords)) /
                              std::sqrt(static_cast<Real>(chords)) +
                          Real(0.03) + Real(0.5) * (est_max - est_min);
-  start_filter(t_us, fn, yaw0, yaw_sigma, vel, vel_sigma);
+  if (imu_alive(t_us)) start_filter(t_us, yaw0, yaw_sigma);
 }
 
 void Navigator::setup_height(Real origin_z_m) {
@@ -390,63 +455,117 @@ void Navigator::setup_height(Real origin_z_m) {
   height_ref_m_ = planar_ ? cfg_.origin_height : origin_z_m;
 }
 
-void Navigator::start_filter(uint64_t t_us, const TrackFix& fix, Real yaw_rad, Real yaw_sigma_rad,
-                             const Vec3& vel_nav_mps, Real vel_sigma_mps) {
-  const Mat3 c = quat_to_dcm(quat_normalised(quat_mul(quat_from_yaw(yaw_rad), q_init_)));
-  const Vec3 lev = lever(fix.tag_index);
-  // Heading uncertainty moves the origin by up to |lever| * yaw sigma.
-  const Real lever_h = lev.head<2>().norm() * std::fmin(yaw_sigma_rad, Real(1));
-  const Real pos_h = std::sqrt(Real(0.5) * fix.sigma_h_m * fix.sigma_h_m + lever_h * lever_h) + Real(0.05);
-  const bool ground = site_.platform == Platform::kGround;
-  const Real pos_v = last_fix_sigma_z_m_ > Real(0) ? last_fix_sigma_z_m_ : (ground ? Real(0.2) : Real(1.0));
-  start_filter_at(t_us, fix.tag_pos_nav_m - c * lev, Vec3(pos_h, pos_h, pos_v), yaw_rad, yaw_sigma_rad, vel_nav_mps,
-                  Vec3(vel_sigma_mps, vel_sigma_mps, Real(0.2)));
+Vec3 Navigator::mean_lever() const {
+  Vec3 sum = Vec3::Zero();
+  const size_t n = site_.num_tags < kMaxTags ? site_.num_tags : kMaxTags;
+  for (size_t i = 0; i < n; ++i) sum += lever(static_cast<int>(i));
+  return n > 0 ? Vec3(sum / static_cast<Real>(n)) : sum;
 }
 
-void Navigator::start_filter_at(uint64_t t_us, const Vec3& pos_nav_m, const Vec3& pos_sigma_m, Real yaw_rad,
-                                Real yaw_sigma_rad, const Vec3& vel_nav_mps, const Vec3& vel_sigma_mps) {
-  NominalState x;
-  x.q_nav_body = quat_normalised(quat_mul(quat_from_yaw(yaw_rad), q_init_));
-  x.pos_nav_m = pos_nav_m;
-  x.vel_nav_mps = vel_nav_mps;
-  x.bg_body_radps = bg_init_;
-  ErrVec sigma;
-  const Real tilt = levelled_at_rest_ ? kTiltSigmaRest_rad : kTiltSigmaMoving_rad;
-  sigma << pos_sigma_m.x(), pos_sigma_m.y(), pos_sigma_m.z(), vel_sigma_mps.x(), vel_sigma_mps.y(),
-      vel_sigma_mps.z(), tilt, tilt, yaw_sigma_rad,
-      cfg_.accel_bias_init, cfg_.accel_bias_init, cfg_.accel_bias_init,
-      levelled_at_rest_ ? std::fmin(cfg_.gyro_bias_init, Real(0.002)) : cfg_.gyro_bias_init,
-      levelled_at_rest_ ? std::fmin(cfg_.gyro_bias_init, Real(0.002)) : cfg_.gyro_bias_init,
-      levelled_at_rest_ ? std::fmin(cfg_.gyro_bias_init, Real(0.002)) : cfg_.gyro_bias_init;
-  ekf_.init(x, sigma);
-  phase_ = Phase::kRunning;
-  cv_mode_ = false;
-  t_state_us_ = have_prev_imu_ ? prev_imu_.t_us : t_us;
-  running_since_us_ = t_us;
-  last_constraint_us_ = t_state_us_;
-  after_failure_ = false;
-  gsf_.reset();
-  setup_height(x.pos_nav_m.z());
+void Navigator::cv_set_yaw(Real yaw_rad, Real yaw_sigma_rad) {
+  // Until now the state's horizontal position was that of the tags' centroid
+  // (lever arms unknown in azimuth); with a heading it becomes the body origin.
+  NominalState& x = ekf_.mutable_state();
+  const Quat q = quat_from_yaw(yaw_rad);
+  Vec3 lev_nav = quat_to_dcm(q) * mean_lever();
+  lev_nav.z() = Real(0);
+  x.pos_nav_m -= lev_nav;
+  x.q_nav_body = q;
+  ekf_.refresh_dcm();
+  ekf_.reset_state(ErrIdx::kAtt + 2, yaw_sigma_rad * yaw_sigma_rad);
+  // The centroid-to-origin step carries the heading's uncertainty.
+  const Real lever_var = lev_nav.squaredNorm() * yaw_sigma_rad * yaw_sigma_rad;
+  ekf_.add_variance(ErrIdx::kPos, lever_var);
+  ekf_.add_variance(ErrIdx::kPos + 1, lever_var);
+  cv_yaw_known_ = true;
 }
 
-void Navigator::start_cv_filter(uint64_t t_us, const TrackFix& fix) {
+void Navigator::cv_forget_yaw() {
+  // Back to the centroid form: the heading is no longer trusted.
+  NominalState& x = ekf_.mutable_state();
+  Vec3 lev_nav = ekf_.dcm() * mean_lever();
+  lev_nav.z() = Real(0);
+  x.pos_nav_m += lev_nav;
+  cv_yaw_known_ = false;
+}
+
+void Navigator::start_cv_filter(uint64_t t_us, const TrackFix& fix, NavMode reason) {
+  // Ranges-only filter from the first fix: the state's horizontal position is
+  // the tags' centroid while the heading is unknown (cv_yaw_known_ false), so
+  // an unknown heading never turns a lever arm the wrong way.
   NominalState x;
   x.q_nav_body = levelled_ ? q_init_ : Quat(1, 0, 0, 0);
+  const Mat3 c = quat_to_dcm(x.q_nav_body);
   const Vec3 lev = lever(fix.tag_index);
-  // Heading unknown: take the lever arm's vertical part only, its horizontal part as uncertainty.
-  x.pos_nav_m = fix.tag_pos_nav_m - Vec3(0, 0, (quat_to_dcm(x.q_nav_body) * lev).z());
-  ErrVec sigma;
-  const Real pos_h = std::sqrt(Real(0.5) * fix.sigma_h_m * fix.sigma_h_m + lev.head<2>().squaredNorm()) + Real(0.05);
+  const Vec3 centroid_offset = mean_lever() - lev;  // from this tag to the tags' centroid (body)
+  Vec3 off_h = c * centroid_offset;
+  off_h.z() = Real(0);
+  x.pos_nav_m = fix.tag_pos_nav_m - Vec3(0, 0, (c * lev).z());
+  ErrVec sigma = ErrVec::Zero();
+  const Real pos_h = std::sqrt(Real(0.5) * fix.sigma_h_m * fix.sigma_h_m + off_h.squaredNorm()) + Real(0.02);
   const bool ground = site_.platform == Platform::kGround;
-  const Real pos_v = last_fix_sigma_z_m_ > Real(0) ? last_fix_sigma_z_m_ : (ground ? Real(0.2) : Real(1.0));
-  sigma << pos_h, pos_h, pos_v, Real(2), Real(2), Real(0.5), Real(0.1), Real(0.1), Real(0.1), cfg_.accel_bias_init,
-      cfg_.accel_bias_init, cfg_.accel_bias_init, cfg_.gyro_bias_init, cfg_.gyro_bias_init, cfg_.gyro_bias_init;
+  const Real pos_v = fix.sigma_v_m > Real(0) ? fix.sigma_v_m : (ground ? Real(0.2) : Real(1.0));
+  sigma.segment<3>(ErrIdx::kPos) = Vec3(pos_h, pos_h, pos_v);
+  sigma.segment<3>(ErrIdx::kVel) = Vec3(kCvStartVelSigma_mps, kCvStartVelSigma_mps, kCvStartVelSigmaV_mps);
+  sigma.segment<3>(ErrIdx::kAtt).setConstant(Real(0.1));
+  sigma.segment<3>(ErrIdx::kBa).setConstant(cfg_.accel_bias_init);
+  sigma.segment<3>(ErrIdx::kBg).setConstant(cfg_.gyro_bias_init);
+  sigma(ErrIdx::kScale) = cfg_.scale_sigma;
+  for (size_t i = 0; i < kMaxTags; ++i) sigma(ErrIdx::kTagBias + static_cast<int>(i)) = std::sqrt(tag_bias_prior_var());
+  for (int i = 0; i < kBiasSlots; ++i) sigma(ErrIdx::kAnchorBias + i) = std::sqrt(anchor_bias_prior_var());
   ekf_.init(x, sigma);
+  for (auto& s : slots_) s = BiasSlot{};
+  for (auto& a : anchor_slot_) a = -1;
+  for (auto& t : tag_bias_t_us_) t = 0;
+  gating_.on_filter_restart();
   phase_ = Phase::kRunning;
   cv_mode_ = true;
+  cv_reason_ = reason;
+  cv_yaw_known_ = false;
+  cv_rest_latched_ = false;
   t_state_us_ = t_us;
   running_since_us_ = t_us;
   after_failure_ = false;
+  heading_wait_since_us_ = 0;
+  setup_height(x.pos_nav_m.z());
+}
+
+void Navigator::start_filter(uint64_t t_us, Real yaw_rad, Real yaw_sigma_rad) {
+  // Hand the running ranges-only filter over to the IMU model: position,
+  // velocity and the range errors (with their covariance) carry on; attitude
+  // comes from levelling plus the heading, the IMU biases start fresh.
+  NominalState& x = ekf_.mutable_state();
+  const Quat q = quat_normalised(quat_mul(quat_from_yaw(yaw_rad), q_init_));
+  const Mat3 c = quat_to_dcm(q);
+  if (!cv_yaw_known_) {
+    // Centroid form -> body origin with the new heading; its uncertainty moves the origin.
+    Vec3 lev_nav = c * mean_lever();
+    lev_nav.z() = Real(0);
+    x.pos_nav_m -= lev_nav;
+    const Real lever_var = lev_nav.squaredNorm() * yaw_sigma_rad * yaw_sigma_rad;
+    ekf_.add_variance(ErrIdx::kPos, lever_var);
+    ekf_.add_variance(ErrIdx::kPos + 1, lever_var);
+  }
+  x.q_nav_body = q;
+  x.ba_body_mps2 = ba_init_;
+  x.bg_body_radps = bg_init_;
+  ekf_.refresh_dcm();
+  ErrVec sigma = ErrVec::Zero();
+  const Real tilt = levelled_at_rest_ ? kTiltSigmaRest_rad : kTiltSigmaMoving_rad;
+  const Real bg = levelled_at_rest_ ? std::fmin(cfg_.gyro_bias_init, Real(0.002)) : cfg_.gyro_bias_init;
+  sigma.segment<3>(ErrIdx::kAtt) = Vec3(tilt, tilt, yaw_sigma_rad);
+  sigma.segment<3>(ErrIdx::kBa).setConstant(cfg_.accel_bias_init);
+  sigma.segment<3>(ErrIdx::kBg).setConstant(bg);
+  ekf_.decouple_inertial(sigma);
+  gating_.on_filter_restart();
+  phase_ = Phase::kRunning;
+  cv_mode_ = false;
+  cv_yaw_known_ = false;
+  t_state_us_ = have_prev_imu_ ? prev_imu_.t_us : t_us;
+  last_constraint_us_ = t_state_us_;
+  after_failure_ = false;
+  heading_wait_since_us_ = 0;
+  gsf_.reset();
   setup_height(x.pos_nav_m.z());
 }
 

@@ -1,4 +1,4 @@
-// Sliding-window rest detector (accelerometer magnitude spread, gyro magnitude).
+// Sliding-window rest detector (accelerometer magnitude spread, gyro spread about its mean).
 #include "estimator/rest_detector.hpp"
 
 #include <cmath>
@@ -45,7 +45,6 @@ void RestDetector::evaluate() {
   Vec3 a_sum = Vec3::Zero();
   Vec3 g_sum = Vec3::Zero();
   Real n_sum = Real(0);
-  Real g_max = Real(0);
   size_t n = 0;
   uint64_t age_us = 0;   // newest sample time minus sample i's [us]
   uint64_t span_us = 0;  // newest minus the oldest sample in the window [us]
@@ -57,7 +56,6 @@ void RestDetector::evaluate() {
     a_sum += accel_[i];
     g_sum += gyro_[i];
     n_sum += an;
-    g_max = std::fmax(g_max, gyro_[i].norm());
     span_us = age_us;
     ++n;
   }
@@ -72,11 +70,15 @@ void RestDetector::evaluate() {
   accel_mean_ = a_sum * inv_n;
   gyro_mean_ = g_sum * inv_n;
   const Real mean = n_sum * inv_n;
+  Real g_max = Real(0);
   Real var = Real(0);  // second pass: no cancellation around |a| ~ 9.8
   for (size_t k = 0; k < n; ++k) {
     const size_t i = (newest + kCapacity - k) % kCapacity;
     const Real d = accel_[i].norm() - mean;
     var += d * d;
+    // Spread of the gyro about its window mean: a consumer gyro's turn-on bias
+    // (1-2 deg/s) must not read as rotation.
+    g_max = std::fmax(g_max, (gyro_[i] - gyro_mean_).norm());
   }
   var *= inv_n;
   at_rest_ = full_ && std::sqrt(var) < accel_std_max_ && g_max < gyro_max_;

@@ -48,7 +48,11 @@ struct UwbRange {
 #ifndef UWBNAV_MAX_TAGS
 #define UWBNAV_MAX_TAGS 4
 #endif
-constexpr size_t kMaxAnchors = 16;  // capacity of the anchor table
+#ifndef UWBNAV_MAX_ANCHORS
+#define UWBNAV_MAX_ANCHORS 16
+#endif
+constexpr size_t kMaxAnchors = UWBNAV_MAX_ANCHORS;  // capacity of the anchor table
+static_assert(kMaxAnchors >= 4 && kMaxAnchors <= 16, "anchor table: 4..16 (CAN NLOS mask has 16 bits)");
 constexpr size_t kMaxTags = UWBNAV_MAX_TAGS;  // capacity of the tag table
 static_assert(kMaxTags >= 1 && kMaxTags <= 255, "tag ids and indices are uint8_t");
 

@@ -1,13 +1,39 @@
 // The 100 Hz application cycle (see app.hpp).
 #include "firmware/app.hpp"
 
+#include <cmath>
+
 #include "firmware/param_blob.hpp"
 
 namespace uwbnav {
+namespace {
+
+// The commissioned range calibration of the board's site (docs/commissioning.md)
+// is usable: either uncalibrated (sigma NaN, every offset zero) or a sigma in
+// (0, 1] m with every offset of the site's pairs finite and within +-10 m.
+bool site_calibration_valid(const SiteConfig& site) {
+  const float sigma = site.range_offset_sigma_m;
+  const bool calibrated = !std::isnan(sigma);
+  if (calibrated && !(sigma > 0.0F && sigma <= 1.0F)) return false;
+  for (size_t a = 0; a < kMaxAnchors; ++a) {
+    for (size_t t = 0; t < kMaxTags; ++t) {
+      const float v = site.range_offset_m[a][t];
+      if (!calibrated && v != 0.0F) return false;
+      if (!std::isfinite(v) || std::fabs(v) > 10.0F) return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
 
 App::App(hal::Board& board) : board_(board) {}
 
 Status App::init() {
+  if (!site_calibration_valid(board_.site)) {
+    initialised_ = false;
+    return Status::kInvalidArgument;
+  }
   params_.reset_all();
   ignore_status(load_params());  // empty or corrupt store: defaults stay
   validator_.configure(board_.site, params_);

@@ -51,6 +51,9 @@ class App {
 
   // Loads parameters from the store (defaults when empty/corrupt), configures
   // the estimator with the board's site. Call once before the first tick.
+  // kInvalidArgument (and no ticks run) when the site's range calibration is
+  // unusable: offsets non-finite or beyond +-10 m, sigma outside (0, 1] m, or
+  // offsets set on an uncalibrated (sigma NaN) site.
   [[nodiscard]] Status init();
 
   // One cycle at loop time now_us (the cycle's deadline on the loop's grid).

@@ -13,14 +13,6 @@ float norm3(const Vec3f& v) { return std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z
 
 Verdict reject(RejectReason r) { return Verdict{false, r}; }
 
-bool same_bits(float a, float b) {
-  uint32_t ua = 0;
-  uint32_t ub = 0;
-  std::memcpy(&ua, &a, sizeof ua);
-  std::memcpy(&ub, &b, sizeof ub);
-  return ua == ub;
-}
-
 }  // namespace
 
 void InputValidator::configure(const SiteConfig& site, const Params& params) {
@@ -35,7 +27,6 @@ void InputValidator::update_params(const Params& params) {
   min_range_m_ = params[ParamId::kUwbMinRange];
   max_range_m_ = params[ParamId::kUwbMaxRange];
   stale_us_ = param_us(params[ParamId::kInStaleUs]);
-  drop_repeated_ = params[ParamId::kInDropRepeated] > 0.5F;
 }
 
 void InputValidator::reset_history() {
@@ -78,18 +69,17 @@ Verdict InputValidator::check_uwb(const UwbRange& r, uint64_t now_us) {
   if (g < 0) return reject(RejectReason::kUnknownTag);
   const size_t ai = static_cast<size_t>(a);
   const size_t gi = static_cast<size_t>(g);
-  if (have_pair_[ai][gi]) {
-    if (r.t_us == last_pair_t_us_[ai][gi]) return reject(RejectReason::kDuplicate);
-    // A radio re-reporting its previous result: bit-identical range from the same pair.
-    if (drop_repeated_ && same_bits(r.range_m, last_pair_range_m_[ai][gi])) return reject(RejectReason::kDuplicate);
-  }
+  // A duplicate is a second report of one ranging exchange: the same pair with
+  // the same sensor timestamp (whatever its value). Equal values at different
+  // timestamps are new measurements: a radio with 1 cm (or 6 mm) resolution
+  // legitimately repeats its last value whenever the tag moved less than that.
+  if (have_pair_[ai][gi] && r.t_us == last_pair_t_us_[ai][gi]) return reject(RejectReason::kDuplicate);
   const Verdict v = check_time(r.t_us, now_us, last_uwb_t_us_, have_uwb_);
   if (!v.accepted) return v;
   have_uwb_ = true;
   last_uwb_t_us_ = r.t_us;
   have_pair_[ai][gi] = true;
   last_pair_t_us_[ai][gi] = r.t_us;
-  last_pair_range_m_[ai][gi] = r.range_m;
   return v;
 }
 

@@ -1,6 +1,7 @@
 // Input validation: every IMU and UWB frame is checked (NaN/Inf, physical range,
-// unknown anchor/tag, duplicate, out-of-order, stale, future) and counted per
-// reason before anything reaches the estimator.
+// unknown anchor/tag, duplicate = same stream/pair and same timestamp,
+// out-of-order, stale, future) and counted per reason before anything reaches
+// the estimator.
 #pragma once
 
 #include <cstdint>
@@ -37,15 +38,13 @@ class InputValidator {
   float min_range_m_ = 0.0F;
   float max_range_m_ = 0.0F;
   uint64_t stale_us_ = 0;
-  bool drop_repeated_ = true;
 
   bool have_imu_ = false;
   uint64_t last_imu_t_us_ = 0;
   bool have_uwb_ = false;
   uint64_t last_uwb_t_us_ = 0;
-  // Last accepted range per (anchor index, tag index): duplicate / repeat detection.
+  // Timestamp of the last accepted range per (anchor index, tag index): duplicate detection.
   uint64_t last_pair_t_us_[kMaxAnchors][kMaxTags] = {};
-  float last_pair_range_m_[kMaxAnchors][kMaxTags] = {};
   bool have_pair_[kMaxAnchors][kMaxTags] = {};
 };
 

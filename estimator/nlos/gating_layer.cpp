@@ -26,14 +26,27 @@ float distance_m(const Vec3f& a, const Vec3f& b) {
   return std::sqrt(dx * dx + dy * dy + dz * dz);
 }
 
-// Innovation evidence of the default policy: logistic in the normalised
-// innovation, 0.5 at z0, clipped to [0.1, 0.9]: strong channel evidence (up to
-// chan_p_max) can overrule it, as small NLOS biases hide inside the innovation
-// noise (tuned on seeds 101-106, docs/nlos.md).
-constexpr float kInnovEvidenceClip = 0.1F;
-float innovation_p_nlos(float z, float z0) {
-  if (!std::isfinite(z)) return kNaNf;
-  const float p = 1.0F / (1.0F + std::exp(-2.0F * (z - z0)));
+// Innovation evidence of the default policy (docs/nlos.md "Innovation evidence"):
+// the likelihood ratio of the innovation nu under NLOS, where the range carries
+// a positive excess b ~ Exp(mean mu) on top of the LOS error N(0, S) (an
+// exponentially modified Gaussian), against LOS, N(0, S):
+//   f_nlos(nu) = (1/mu) exp(S/(2 mu^2) - nu/mu) Phi(nu/sqrt(S) - sqrt(S)/mu),
+// as a probability on balanced classes, LR / (1 + LR). A range shorter than
+// predicted is evidence of line of sight (an NLOS path is never shorter).
+// Phi by the logistic approximation 1 / (1 + e^(-1.702 x)) (error < 0.01):
+//   LR = (sqrt(2 pi S) / mu) exp(S/(2 mu^2) - nu/mu + nu^2/(2 S)) Phi(x),
+// without logarithms (picolibc's logf goes through double on the M4F).
+// Clipped to [0.02, 0.98]: strong channel evidence can overrule it.
+constexpr float kInnovEvidenceClip = 0.02F;
+float innovation_p_nlos(float nu_m, float s_m2, float mu_m) {
+  if (!std::isfinite(nu_m) || !(s_m2 > 0.0F) || !(mu_m > 0.0F)) return kNaNf;
+  const float sd = std::sqrt(s_m2);
+  const float x = nu_m / sd - sd / mu_m;
+  const float phi = 1.0F / (1.0F + std::exp(std::fmin(-1.702F * x, 60.0F)));
+  const float e = s_m2 / (2.0F * mu_m * mu_m) - nu_m / mu_m + 0.5F * nu_m * nu_m / s_m2;
+  const float lr = 2.5066283F * sd / mu_m * std::exp(std::fmin(std::fmax(e, -40.0F), 40.0F)) * phi;
+  const float p = lr / (1.0F + lr);
+  if (!std::isfinite(p)) return 1.0F - kInnovEvidenceClip;
   return std::fmin(std::fmax(p, kInnovEvidenceClip), 1.0F - kInnovEvidenceClip);
 }
 
@@ -75,22 +88,26 @@ void GatingLayer::update_params(const Params& params) {
   chan_lo_db_ = params[ParamId::kGateChanLoDb];
   chan_hi_db_ = params[ParamId::kGateChanHiDb];
   chan_p_max_ = params[ParamId::kGateChanPMax];
-  hyst_n_ = static_cast<uint16_t>(std::lround(params[ParamId::kGateHystN]));
+  nlos_episode_s_ = params[ParamId::kGateNlosEpisode];
+  los_episode_s_ = params[ParamId::kGateLosEpisode];
   escape_us_ = param_us(params[ParamId::kGateEscapeS] * 1e6F);
   escape_r_scale_ = params[ParamId::kGateEscapeRScale];
   default_nlos_ = params[ParamId::kGateDefaultNlos];
-  innov_z0_ = params[ParamId::kGateInnovZ0];
+  nlos_bias_m_ = params[ParamId::kGateNlosBias];
   verify_frac_ = params[ParamId::kGateVerifyFrac];
   drift_frac_ = params[ParamId::kGateDriftFrac];
-  warmup_us_ = param_us(params[ParamId::kGateWarmupS] * 1e6F);
 }
 
 void GatingLayer::reset() {
   for (Slot& s : slots_) s = Slot{};
+  on_filter_restart();
+}
+
+void GatingLayer::on_filter_restart() {
   last_pass_t_us_ = 0;
   seen_ready_ = false;
   escape_active_ = false;
-  los_share_ = 0.0F;
+  los_share_ = 1.0F;
 }
 
 GatingAnchorStats GatingLayer::anchor_stats(size_t anchor_index) const {
@@ -270,7 +287,8 @@ GatingDecision GatingLayer::decide_raim(const RangeContext& ctx, int slot) const
 
 GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Evidence& e, Slot& slot) {
   GatingDecision d;
-  const float p_innov = innovation_p_nlos(e.z, innov_z0_);
+  const float p_innov =
+      ctx.filter_ready ? innovation_p_nlos(ctx.innovation_m, ctx.innovation_var_m2, nlos_bias_m_) : kNaNf;
   // With a prediction the normalised innovation supersedes the coarse models of seed 000
   // (SVM, consistency), which only read the same filter's speed and travelled distance and
   // measurably add false alarms (docs/nlos.md); they decide while the filter is not ready.
@@ -287,67 +305,72 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
   const float evidence[4] = {p_coarse, coarse ? e.p_mc : kNaNf, e.p_chan, p_innov};
   const float r = ds_combine_all(evidence, 4);
   d.p_svm = p_coarse;  // the SVM that ran (SVM2, else SVM1); NaN when the coarse models were not used
-  d.p_fused = r;
-  d.nlos = r > default_nlos_;
-  // A gross outlier against a converged filter is rejected whatever the other evidence says.
-  if (std::isfinite(e.z) && e.z > innov_gate_sigma_) d.nlos = true;
-  if (ctx.filter_ready && !std::isfinite(e.z)) d.nlos = true;
-  // A running but untrusted filter (e.g. the constant-velocity mode without IMU) still
-  // rejects gross outliers, at twice the gate.
-  if (!ctx.filter_ready && ctx.innovation_var_m2 > 0.0F &&
-      std::fabs(ctx.innovation_m) > 2.0F * innov_gate_sigma_ * std::sqrt(ctx.innovation_var_m2)) {
-    d.nlos = true;
+  // A gross outlier against the filter is rejected whatever the other evidence says;
+  // a running but untrusted filter (large covariance) rejects at twice the gate.
+  const bool gross = (std::isfinite(e.z) && e.z > innov_gate_sigma_) || (ctx.filter_ready && !std::isfinite(e.z)) ||
+                     (!ctx.filter_ready && ctx.innovation_var_m2 > 0.0F &&
+                      std::fabs(ctx.innovation_m) > 2.0F * innov_gate_sigma_ * std::sqrt(ctx.innovation_var_m2));
+  // NLOS episodes last (docs/nlos.md "Episodes"): a two-state Markov chain per
+  // pair with mean episode and line-of-sight lengths predicts the pair's NLOS
+  // probability from its previous posterior, p- = p e^(-dt/T_nlos) + (1 - p)(1 - e^(-dt/T_los)),
+  // and the evidence (probabilities on balanced classes, i.e. likelihood ratios)
+  // updates it: posterior odds = prior odds x evidence odds (the product of eq. 8).
+  // The chain's stationary NLOS probability bounds the prediction from below:
+  // a long line-of-sight history cannot make the pair arbitrarily trusted.
+  const float p_stationary = nlos_episode_s_ / (nlos_episode_s_ + los_episode_s_);
+  float prior = p_stationary;
+  if (slot.has_p_nlos && ctx.range.t_us >= slot.p_nlos_t_us) {
+    const uint64_t dt_us = ctx.range.t_us - slot.p_nlos_t_us;
+    const float dt_s = static_cast<float>(static_cast<uint32_t>(dt_us < 4000000000ULL ? dt_us : 4000000000ULL)) * 1e-6F;
+    const float stay = std::exp(-dt_s / nlos_episode_s_);
+    const float enter = 1.0F - std::exp(-dt_s / los_episode_s_);
+    prior = std::fmax(slot.p_nlos * stay + (1.0F - slot.p_nlos) * enter, p_stationary);
   }
+  const float posterior = std::isfinite(r) ? ds_combine(r, prior) : prior;
+  d.nlos = gross || posterior > default_nlos_;
+  // Held: the evidence alone says line of sight, the episode says not yet.
+  if (!gross && posterior > default_nlos_ && !(r > default_nlos_)) ++slot.stats.held_count;
+  // The stored belief stays away from certainty so that the chain can turn.
+  constexpr float kBeliefClip = 0.999F;
+  slot.p_nlos = d.nlos ? std::fmin(std::fmax(posterior, default_nlos_), kBeliefClip) : std::fmin(posterior, default_nlos_);
+  // A range fused although it may be NLOS weighs by its probability of line of
+  // sight: R / (1 - p), the expected weight of the two-class mixture (EM).
+  const float los_weight_scale = posterior < 0.99F ? 1.0F / (1.0F - posterior) : 100.0F;
+  slot.p_nlos_t_us = ctx.range.t_us;
+  slot.has_p_nlos = true;
+  slot.nlos_state = d.nlos;
+  d.p_fused = posterior;
   d.use = !d.nlos;
-  // Per-pair hysteresis: an NLOS pair needs hyst_n consecutive LOS ranges to be fused again.
-  if (d.nlos) {
-    slot.nlos_state = hyst_n_ > 0;
-    slot.los_streak = 0;
-  } else if (slot.nlos_state) {
-    ++slot.los_streak;
-    if (slot.los_streak >= hyst_n_) {
-      slot.nlos_state = false;
-    } else {
-      d.use = false;
-      ++slot.stats.held_count;
-    }
-  }
   // Seed 003 inflation for accepted ranges with a large normalised residual.
   if (d.use) {
     const float factor = residual_inflation_factor(e.z, resid_th_, resid_beta_);
-    if (std::isfinite(factor)) d.r_scale = factor;
+    d.r_scale = std::fmax(std::isfinite(factor) ? factor : 1.0F, los_weight_scale);
   }
-  // Robust mode (the escape): a filter that has just become ready is unverified (its fix
-  // may be biased by NLOS ranges), and a filter whose innovations stopped matching the
-  // measurements (running share of |innovation| < resid_th sigma_uwb below drift_frac), or
-  // that fused nothing for escape_s while ranges kept arriving, may have drifted away from
-  // its own gate. (Ranges held back by the hysteresis do not count as rejected: the
-  // filter agrees with them.) In robust mode every finite range is fused with R inflated by the seed
-  // 003 factor of its residual (at least escape_r_scale): an iteratively reweighted update
-  // in which the consistent ranges dominate. It ends when the share exceeds verify_frac,
-  // at the earliest warmup_s after the first convergence (heading and velocity of a filter
-  // initialised on the move need some driving before its own covariance can be trusted).
-  // The share uses the nominal sigma_uwb, not S: a filter with a large covariance has not
-  // shown that it agrees with the ranges.
+  // Robust mode (the escape): a filter whose innovations stopped matching its own
+  // claim (running share of |innovation| < resid_th sqrt(S) below drift_frac), or that
+  // fused nothing for escape_s while ranges kept arriving, may have drifted away from
+  // its own gate. (Ranges held out as NLOS by their episode do not count as rejected.)
+  // In robust mode every finite range is fused with R inflated by the seed 003 factor
+  // of its residual (at least escape_r_scale): an iteratively reweighted update in
+  // which the consistent ranges dominate. It ends when the share exceeds verify_frac.
+  // The filter's covariance is honest by construction (range-error states, learned
+  // noise, recovery by inflation in the Navigator), so a new filter starts trusted.
   if (ctx.filter_ready && escape_us_ > 0) {
-    if (std::isfinite(ctx.innovation_m)) {
+    if (std::isfinite(e.z)) {
       constexpr float kShareGain = 0.02F;  // EMA over about 50 ranges
-      const bool agrees = std::fabs(ctx.innovation_m) < resid_th_ * sigma_uwb_m(ctx);
+      const bool agrees = e.z < resid_th_;
       los_share_ += kShareGain * ((agrees ? 1.0F : 0.0F) - los_share_);
     }
-    const bool first_ready = !seen_ready_;
-    seen_ready_ = true;
-    if (first_ready) {
-      first_ready_t_us_ = ctx.range.t_us;
+    if (!seen_ready_) {
+      seen_ready_ = true;
       last_pass_t_us_ = ctx.range.t_us;
     }
-    const bool warming_up = ctx.range.t_us - first_ready_t_us_ < warmup_us_;
     const bool starved = ctx.range.t_us - last_pass_t_us_ > escape_us_;
-    if (!escape_active_ && (first_ready || starved || los_share_ < drift_frac_)) {
+    if (!escape_active_ && (starved || los_share_ < drift_frac_)) {
       escape_active_ = true;
       ++escape_entries_;
       los_share_ = 0.0F;
-    } else if (escape_active_ && !warming_up && los_share_ > verify_frac_) {
+    } else if (escape_active_ && los_share_ > verify_frac_) {
       escape_active_ = false;
     }
     if (escape_active_) {

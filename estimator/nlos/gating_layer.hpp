@@ -2,7 +2,7 @@
 // methods of estimator/nlos/ (SVM p1, consistency p2, Dempster-Shafer R,
 // residual inflation, RAIM, innovation gate, channel diagnostics) and the
 // selected policy's decision (GatingPolicy, docs/nlos.md). Per anchor/tag
-// pair state for eq. 1/3 differences, epochs, hysteresis and counters; an
+// pair state for eq. 1/3 differences, epochs, NLOS episodes and counters; an
 // escape for a filter locked out by its own gate. Static memory only;
 // bounded cost per range (RAIM: at most kRaimMaxRanges LS solves).
 #pragma once
@@ -24,9 +24,9 @@ struct GatingAnchorStats {
   uint32_t los_count = 0;       // ranges classified LOS
   uint32_t nlos_count = 0;      // ranges classified NLOS
   uint32_t used_count = 0;      // ranges the Navigator fused
-  uint32_t held_count = 0;      // LOS ranges held back by hysteresis
+  uint32_t held_count = 0;      // ranges the evidence alone calls LOS, held NLOS by the episode prior
   uint32_t escape_count = 0;    // ranges admitted by the escape
-  bool nlos_state = false;      // hysteretic NLOS state (any tag of this anchor)
+  bool nlos_state = false;      // NLOS state of the episode model (any tag of this anchor)
   float last_p_nlos = kNaNf;    // last fused NLOS probability
 };
 
@@ -40,8 +40,12 @@ class GatingLayer {
   [[nodiscard]] Status configure(const SiteConfig& site, const Params& params);
   // Applies changed parameter values live; keeps per-anchor state.
   void update_params(const Params& params);
-  // Clears per-anchor state (hysteresis, previous ranges, epochs, escape).
+  // Clears per-anchor state (NLOS episodes, previous ranges, epochs, escape).
   void reset();
+  // The filter was (re)started or changed its model (hand-over from the
+  // ranges-only to the IMU filter, re-anchoring): its predictions are
+  // unverified again, so the robust warm-up starts over; per-pair state stays.
+  void on_filter_restart();
 
   // Verdict on one range, before the filter update. Never touches the filter.
   // Ranges must come in non-decreasing time (as the Navigator guarantees).
@@ -70,8 +74,11 @@ class GatingLayer {
     float last_range_m = 0.0F;
     Vec3f last_tag_pos_nav_m;
     GatingAnchorStats stats;
-    // Hysteresis (default policy).
-    uint16_t los_streak = 0;
+    // Two-state Markov chain of the pair's NLOS state (default policy): the
+    // posterior NLOS probability after the pair's latest range and its time.
+    uint64_t p_nlos_t_us = 0;
+    float p_nlos = 0.5F;
+    bool has_p_nlos = false;
     bool nlos_state = false;
     bool has_prev = false;
     bool has_last = false;
@@ -126,19 +133,18 @@ class GatingLayer {
   float chan_lo_db_ = 6.0F;
   float chan_hi_db_ = 10.0F;
   float chan_p_max_ = 0.99F;
-  uint16_t hyst_n_ = 2;
+  float nlos_episode_s_ = 2.0F;   // mean NLOS episode length [s]
+  float los_episode_s_ = 20.0F;   // mean LOS stretch [s]
   uint64_t escape_us_ = 2000000;
   float escape_r_scale_ = 100.0F;
   float default_nlos_ = 0.5F;
-  float innov_z0_ = 3.0F;
+  float nlos_bias_m_ = 0.5F;      // mean NLOS excess of the innovation evidence [m]
   float verify_frac_ = 0.35F;
   float drift_frac_ = 0.15F;
-  uint64_t warmup_us_ = 3000000;
 
   // Escape state (default policy).
   uint64_t last_pass_t_us_ = 0;    // last range that passed the gate while the filter was ready
   bool seen_ready_ = false;         // the filter has been ready since the last reset
-  uint64_t first_ready_t_us_ = 0;   // when it first was
   bool escape_active_ = false;      // robust mode (warm-up or escape)
   uint32_t escape_entries_ = 0;
   float los_share_ = 0.0F;          // EMA of (|innovation| < resid_th sigma_uwb) while ready

@@ -95,6 +95,10 @@ namespace table {
 inline constexpr ValueName kStatusValues[] = {
     {0, "initialising"}, {1, "valid"}, {2, "degraded"}, {3, "invalid"}};
 
+// NavMode (estimator/types.hpp): where the solution of the group comes from.
+inline constexpr ValueName kModeValues[] = {{0, "none"},       {1, "inertial"},   {2, "uwb_only"},
+                                            {3, "aligning"},   {4, "recovering"}, {5, "ls_fix"}};
+
 inline constexpr ValueName kPowerValues[] = {{0, "not_available"}};
 
 // Common E2E header of every frame: CRC (byte 0), alive counter (byte 1 bits
@@ -110,6 +114,10 @@ inline constexpr ValueName kPowerValues[] = {{0, "not_available"}};
 
 inline constexpr SignalDef kNavTimeSignals[] = {
     UWBNAV_CAN_HEADER("NavTime"),
+    {"NavTime_Mode", 12, 3, false, 1.0, 0.0, 0.0, 7.0, "",
+     "source of the solution of this 10 ms group: 0 none (no estimate: position not published), 1 inertial, "
+     "2 uwb_only, 3 aligning, 4 recovering (ranges-only while the IMU filter re-acquires its heading), 5 ls_fix",
+     NonFinite::kZeroFlagged, kModeValues, 6},
     {"NavTime_Us", 16, 48, false, 1.0, 0.0, 0.0, 281474976710655.0, "us",
      "estimator time of the solution carried by the frames of this 10 ms group (same alive counter)",
      NonFinite::kZeroFlagged, nullptr, 0},

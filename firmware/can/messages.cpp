@@ -361,7 +361,7 @@ class Unpacker {
 
 // Payload kinds per message, in table order: the typed functions below call
 // Packer/Unpacker in exactly this order.
-static_assert(kinds_are(MsgId::kNavTime, "c"));
+static_assert(kinds_are(MsgId::kNavTime, "cc"));
 static_assert(kinds_are(MsgId::kPosXY, "cpp"));
 static_assert(kinds_are(MsgId::kPosZ, "cppcc"));
 static_assert(kinds_are(MsgId::kVelHdg, "ppa"));
@@ -380,6 +380,7 @@ NavStatus status_from(uint64_t v) { return static_cast<NavStatus>(v & 0x3U); }
 
 bool encode(const NavTimeMsg& m, uint8_t counter, hal::CanFrame& out) {
   Packer p(layout<MsgId::kNavTime>(), out);
+  p.count(static_cast<uint8_t>(m.mode));
   p.count(m.nav_t_us);
   return p.finish(counter);
 }
@@ -469,7 +470,11 @@ bool encode(const HilUwbTimeMsg& m, uint8_t counter, hal::CanFrame& out) {
 Status decode(const hal::CanFrame& f, NavTimeMsg& m, FrameMeta* meta) {
   Unpacker u(layout<MsgId::kNavTime>(), f);
   const Status s = u.check(meta);
-  if (s == Status::kOk) m.nav_t_us = u.count();
+  if (s == Status::kOk) {
+    const uint64_t mode = u.count();
+    m.mode = static_cast<NavMode>(mode <= static_cast<uint64_t>(NavMode::kLsFix) ? mode : 0U);
+    m.nav_t_us = u.count();
+  }
   return s;
 }
 

@@ -78,6 +78,7 @@ struct FrameMeta {
 
 struct NavTimeMsg {
   uint64_t nav_t_us = 0;  // NavOutput::t_us of this output group [us], 48 bits
+  NavMode mode = NavMode::kNone;  // source of the group's solution, 3 bits
 };
 struct PosXYMsg {
   NavStatus status = NavStatus::kInitialising;

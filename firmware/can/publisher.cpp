@@ -115,7 +115,7 @@ void CanPublisher::on_cycle(uint64_t t_us, const NavOutput& nav, const CanDiag& 
   hal::CanFrame f;
   f.t_us = t_us;
   if (due(pos_, t_us)) {
-    bool sat = encode(NavTimeMsg{nav.t_us}, counters_[kNavTime], f);
+    bool sat = encode(NavTimeMsg{nav.t_us, nav.mode}, counters_[kNavTime], f);
     send(kNavTime, f, sat, bus);
     sat = encode(pos_xy_from(nav), counters_[kPosXY], f);
     send(kPosXY, f, sat, bus);

@@ -197,6 +197,7 @@ bool Console::job_step() {
     case Job::kEkf: return step_ekf(step);
     case Job::kStats: return step_stats(step);
     case Job::kHistory: return step_history(step);
+    case Job::kCal: return step_cal(step);
   }
   return false;
 }

@@ -85,7 +85,7 @@ class Console final : public LogSink {
     const char* summary;
     Handler handler;
   };
-  enum class Job : uint8_t { kNone, kHelp, kParamList, kAnchors, kEkf, kStats, kHistory };
+  enum class Job : uint8_t { kNone, kHelp, kParamList, kAnchors, kEkf, kStats, kHistory, kCal };
 
   // What a multi-line reply reports, copied when the command runs, so that all
   // its lines describe the same cycle although they go out over several.
@@ -153,6 +153,7 @@ class Console final : public LogSink {
   void cmd_reset(size_t argc, char** argv);
   void cmd_history(size_t argc, char** argv);
   void cmd_echo(size_t argc, char** argv);
+  void cmd_cal(size_t argc, char** argv);
 
   // Job steps: emit line `step`, return true while more lines follow.
   bool step_help(size_t step);
@@ -161,6 +162,7 @@ class Console final : public LogSink {
   bool step_ekf(size_t step);
   bool step_stats(size_t step);
   bool step_history(size_t step);
+  bool step_cal(size_t step);
   void add_param(size_t index, bool with_doc);
   void add_param_change(const ParamDef& p, float old);
   void add_pos_fields();

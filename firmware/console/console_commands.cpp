@@ -1,5 +1,5 @@
 // Console commands: help, version, status, stats, anchors, ekf, param, log,
-// stream, reset, history, echo. Reply format: docs/console.md.
+// stream, reset, history, echo, cal. Reply format: docs/console.md.
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -97,6 +97,7 @@ const Console::Command Console::kCommands[] = {
     {"reset", "reset filter|stats", "restart the estimator, or zero the counters", &Console::cmd_reset},
     {"history", "history", "recent lines; !! repeats the last, !N repeats entry N", &Console::cmd_history},
     {"echo", "echo [on|off]", "echo of typed characters and the prompt", &Console::cmd_echo},
+    {"cal", "cal", "site range calibration: per anchor/tag pair offset and sigma, or uncalibrated", &Console::cmd_cal},
 };
 const size_t Console::kNumCommands = sizeof Console::kCommands / sizeof Console::kCommands[0];
 
@@ -560,6 +561,39 @@ void Console::cmd_echo(size_t argc, char** argv) {
   begin("echo");
   add(" %s", echo_ ? "on" : "off");
   reply_end();
+}
+
+// The site's commissioned range calibration (docs/commissioning.md): a count
+// line, then one line per anchor/tag pair. The site is constant after start-up,
+// so no snapshot is needed.
+void Console::cmd_cal(size_t argc, char**) {
+  if (argc != 1) {
+    error("cal: takes no arguments");
+    return;
+  }
+  start_job(Job::kCal, false);
+}
+
+bool Console::step_cal(size_t step) {
+  const SiteConfig& site = app_.board().site;
+  const bool calibrated = !std::isnan(site.range_offset_sigma_m);
+  const size_t pairs = calibrated ? site.num_anchors * site.num_tags : 0;
+  if (step == 0) {
+    begin("cal");
+    add(" status=%s pairs=%lu", calibrated ? "calibrated" : "uncalibrated", static_cast<unsigned long>(pairs));
+    if (calibrated) add_fixed(" sigma_m=", site.range_offset_sigma_m, 4);
+    reply_end();
+    return pairs > 0;
+  }
+  const size_t k = step - 1;
+  const size_t a = k / site.num_tags;
+  const size_t t = k % site.num_tags;
+  begin("cal");
+  add(" anchor=%u tag=%u", static_cast<unsigned>(site.anchors[a].id), static_cast<unsigned>(site.tags[t].id));
+  add_fixed(" offset_m=", site.range_offset_m[a][t], 4);
+  add_fixed(" sigma_m=", site.range_offset_sigma_m, 4);
+  reply_end();
+  return step < pairs;
 }
 
 }  // namespace uwbnav

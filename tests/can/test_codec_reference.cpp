@@ -338,8 +338,8 @@ TEST(CanCodecReference, TypedFramesAreBitIdenticalToTheDoublePacker) {
   for (int i = 0; i < 20000; ++i) {
     const auto counter = static_cast<uint8_t>(i % 15);
     hal::CanFrame f;
-    const NavTimeMsg nt{count() * 4099U};
-    const double nt_v[] = {0, 0, 0, static_cast<double>(nt.nav_t_us)};
+    const NavTimeMsg nt{count() * 4099U, static_cast<NavMode>(any(rng) % 6)};
+    const double nt_v[] = {0, 0, 0, static_cast<double>(nt.mode), static_cast<double>(nt.nav_t_us)};
     same(find_message(id_of(MsgId::kNavTime)), nt_v, encode(nt, counter, f), f, counter);
 
     const PosXYMsg xy{static_cast<NavStatus>(any(rng) % 4), value(9000), value(9000)};

@@ -163,6 +163,18 @@ TEST(CanMessages, HeadingIsWrappedIntoPlusMinusPiWithoutSaturation) {
   EXPECT_NEAR(d.heading_rad, -7.0F + 2.0F * 3.14159265F, 0.00005F + 1e-6F);
 }
 
+TEST(CanMessages, NavTimeCarriesTheSolutionModeOfItsGroup) {
+  hal::CanFrame f;
+  for (const NavMode mode : {NavMode::kNone, NavMode::kInertial, NavMode::kUwbOnly, NavMode::kAligning,
+                             NavMode::kRecovering, NavMode::kLsFix}) {
+    encode(NavTimeMsg{987654321ULL, mode}, 3, f);
+    NavTimeMsg t;
+    ASSERT_EQ(decode(f, t), Status::kOk);
+    EXPECT_EQ(t.mode, mode);
+    EXPECT_EQ(t.nav_t_us, 987654321ULL);
+  }
+}
+
 TEST(CanMessages, DecodeRejectsWrongIdLengthCrcAndCounterFifteen) {
   hal::CanFrame f;
   encode(NavTimeMsg{123456789012ULL}, 4, f);

@@ -231,7 +231,7 @@ TEST(ConsoleCommands, SettingAParameterChangesValidationOfTheNextFrames) {
 TEST(ConsoleCommands, BadParamValuesAreRejectedWithOneErrorLineAndLeaveTheParameterUnchanged) {
   ConsoleRig rig(sim_recording());
   const Params before = rig.app.params();
-  for (const char* cmd : {"param set in.drop_repeated 2", "param set in.drop_repeated -1", "param set uwb.sigma 0",
+  for (const char* cmd : {"param set can.tx_enable 2", "param set can.tx_enable -1", "param set uwb.sigma 0",
                           "param set uwb.sigma 1e9", "param set uwb.sigma nan", "param set uwb.sigma inf",
                           "param set uwb.sigma 0.5x", "param set uwb.sigma abc", "param set uwb.sigma",
                           "param set no.such 1", "param get no.such", "param reset no.such", "param frobnicate",
@@ -241,8 +241,8 @@ TEST(ConsoleCommands, BadParamValuesAreRejectedWithOneErrorLineAndLeaveTheParame
     EXPECT_EQ(lines[0].rfind("error: param: ", 0), 0U) << cmd << " -> " << lines[0];
     EXPECT_TRUE(params_equal(rig.app.params(), before)) << cmd;
   }
-  const auto lines = reply_lines(rig.command("param set in.drop_repeated 2"));
-  EXPECT_EQ(lines.at(0), "error: param: in.drop_repeated=2 out of range [0, 1]; unchanged");
+  const auto lines = reply_lines(rig.command("param set can.tx_enable 2"));
+  EXPECT_EQ(lines.at(0), "error: param: can.tx_enable=2 out of range [0, 1]; unchanged");
 }
 
 TEST(ConsoleCommands, ParamSaveAndLoadGoThroughTheParameterStore) {

@@ -84,7 +84,7 @@ TEST(DatasetSharedData, HanyangRecordingsHaveAnchors3_5_9_12AndNoImu) {
     EXPECT_EQ(rec.site.platform, Platform::kGround);
     ASSERT_EQ(rec.site.num_tags, 1U);
     EXPECT_EQ(rec.site.tags[0].lever_body_m.z, 1.02F);
-    // Stale repeated ranges (same anchor and value again) are valid rows and are kept.
+    // Repeated values (same anchor and value again at a new timestamp) are valid rows and are kept.
     size_t repeats = 0;
     for (size_t i = 1; i < rec.uwb.size(); ++i) {
       for (size_t j = i; j-- > 0 && j + 8 > i;) {

@@ -27,6 +27,7 @@ struct RunScore {
   double rmse_h_m = 0;       // horizontal RMSE over scored outputs
   double max_h_m = 0;
   double inside_2sigma = 0;  // fraction of per-axis (x and y) errors inside 2 sigma
+  double mean_sigma_h_m = 0; // mean claimed horizontal sigma sqrt(sx^2 + sy^2) over scored outputs
   bool all_finite = true;
   NavDiagnostics diag;
 };
@@ -48,6 +49,10 @@ inline bool truth_at(const dataset::Recording& rec, uint64_t t_us, double pos[3]
   return true;
 }
 
+// Without an estimate (mode none) the position is NaN on purpose and the status
+// says initialising or invalid; with one, every published number is finite.
+inline bool output_well_formed(const NavOutput& o);
+
 inline bool output_finite(const NavOutput& o) {
   bool ok = std::isfinite(o.pos_nav_m.x) && std::isfinite(o.pos_nav_m.y) && std::isfinite(o.pos_nav_m.z) &&
             std::isfinite(o.vel_nav_mps.x) && std::isfinite(o.vel_nav_mps.y) && std::isfinite(o.vel_nav_mps.z) &&
@@ -55,6 +60,14 @@ inline bool output_finite(const NavOutput& o) {
             std::isfinite(o.pos_xy_corr) && std::isfinite(o.heading_rad);
   for (float q : o.q_nav_body) ok = ok && std::isfinite(q);
   return ok;
+}
+
+inline bool output_well_formed(const NavOutput& o) {
+  if (o.mode == NavMode::kNone) {
+    return std::isnan(o.pos_nav_m.x) && std::isnan(o.pos_nav_m.y) && std::isnan(o.pos_nav_m.z) &&
+           (o.status == NavStatus::kInitialising || o.status == NavStatus::kInvalid);
+  }
+  return output_finite(o) && o.pos_sigma_m.x > 0.0F && o.pos_sigma_m.y > 0.0F;
 }
 
 // Replays `rec` (IMU and ranges merged by time, output each 10 ms), scoring
@@ -85,6 +98,7 @@ inline RunScore replay(const dataset::Recording& rec, const Params& params, uint
   double sum_sq = 0;
   size_t inside = 0;
   size_t axes = 0;
+  double sigma_sum = 0;
   for (uint64_t t_cycle = (t0 / kCycleUs + 1) * kCycleUs; t_cycle <= t_end + kCycleUs; t_cycle += kCycleUs) {
     while (true) {
       const bool imu_next = i_imu < imu.size() && imu[i_imu].t_us <= t_cycle;
@@ -99,7 +113,7 @@ inline RunScore replay(const dataset::Recording& rec, const Params& params, uint
     }
     ScoredOutput so;
     so.out = nav->output(t_cycle);
-    if (!output_finite(so.out)) score.all_finite = false;
+    if (!output_well_formed(so.out)) score.all_finite = false;
     double truth[3];
     if (truth_at(rec, t_cycle, truth)) {
       so.has_truth = true;
@@ -117,12 +131,16 @@ inline RunScore replay(const dataset::Recording& rec, const Params& params, uint
         const double sx = static_cast<double>(so.out.pos_sigma_m.x);
         const double sy = static_cast<double>(so.out.pos_sigma_m.y);
         inside += (std::fabs(so.err_nav_m[0]) <= 2 * sx) + (std::fabs(so.err_nav_m[1]) <= 2 * sy);
+        sigma_sum += std::sqrt(sx * sx + sy * sy);
         axes += 2;
       }
     }
     score.outputs.push_back(so);
   }
-  if (score.n_scored > 0) score.rmse_h_m = std::sqrt(sum_sq / static_cast<double>(score.n_scored));
+  if (score.n_scored > 0) {
+    score.rmse_h_m = std::sqrt(sum_sq / static_cast<double>(score.n_scored));
+    score.mean_sigma_h_m = sigma_sum / static_cast<double>(score.n_scored);
+  }
   if (axes > 0) score.inside_2sigma = static_cast<double>(inside) / static_cast<double>(axes);
   score.diag = nav->diagnostics();
   return score;

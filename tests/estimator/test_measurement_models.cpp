@@ -1,6 +1,7 @@
-// Analytic Jacobians of every measurement model (range with lever arm and time
-// offset, NHC, ZUPT/ZARU, height) against central differences of the nominal
-// model under error injection; singular range geometry stays finite.
+// Analytic Jacobians of every measurement model (range with lever arm, time
+// offset, scale error, tag and anchor offsets; NHC, ZUPT/ZARU, height) against
+// central differences of the nominal model under error injection; singular
+// range geometry stays finite.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -22,6 +23,7 @@ NominalState inject(const NominalState& x, const ErrVec& dx) {
   y.q_nav_body = quat_normalised(quat_mul(quat_exp(dx.segment<3>(ErrIdx::kAtt)), x.q_nav_body));
   y.ba_body_mps2 += dx.segment<3>(ErrIdx::kBa);
   y.bg_body_radps += dx.segment<3>(ErrIdx::kBg);
+  y.range_err += dx.tail<ErrIdx::kRange>();
   return y;
 }
 
@@ -47,6 +49,9 @@ NominalState sample_state() {
   x.q_nav_body = quat_normalised(Quat(Real(0.9), Real(0.05), Real(-0.08), Real(0.42)));
   x.ba_body_mps2 = Vec3(Real(0.05), Real(-0.1), Real(0.02));
   x.bg_body_radps = Vec3(Real(0.004), Real(-0.003), Real(0.006));
+  x.range_err(0) = Real(0.002);                                           // scale
+  x.range_err(ErrIdx::kTagBias - ErrIdx::kCore + 1) = Real(0.07);         // tag 1 offset
+  x.range_err(ErrIdx::kAnchorBias - ErrIdx::kCore + 2) = Real(-0.11);     // anchor slot 2 offset
   return x;
 }
 
@@ -58,30 +63,65 @@ void expect_row_near(const ErrRow& analytic, const ErrRow& numeric, double tol) 
 
 const double kTol = sizeof(Real) == sizeof(float) ? 2e-3 : 1e-6;
 
-TEST(MmRange, JacobianWithLeverArmAndTimeOffsetMatchesNumeric) {
+RangeErrorSlots slots_tag1_anchor2() {
+  RangeErrorSlots es;
+  es.tag_index = 1;
+  es.anchor_slot = 2;
+  es.known_offset_m = Real(0.25);
+  return es;
+}
+
+TEST(MmRange, JacobianWithLeverArmTimeOffsetScaleAndOffsetsMatchesNumeric) {
   const NominalState x = sample_state();
   const Vec3 gyro(Real(0.3), Real(-0.2), Real(0.8));
   const Vec3 lever(Real(0.5), Real(-0.3), Real(1.7));
   const Vec3 anchor(Real(0), Real(0), Real(1.5));
   const Real dt = Real(0.007);
-  const RangePrediction p = mm_range_predict(x, quat_to_dcm(x.q_nav_body), gyro, lever, anchor, dt);
+  const RangeErrorSlots es = slots_tag1_anchor2();
+  const RangePrediction p = mm_range_predict(x, quat_to_dcm(x.q_nav_body), gyro, lever, anchor, dt, es);
   ASSERT_TRUE(p.valid);
   const ErrRow num = numeric_jacobian(x, [&](const NominalState& y) {
-    return static_cast<double>(mm_range_predict(y, quat_to_dcm(y.q_nav_body), gyro, lever, anchor, dt).range_m);
+    return static_cast<double>(mm_range_predict(y, quat_to_dcm(y.q_nav_body), gyro, lever, anchor, dt, es).range_m);
   });
   expect_row_near(p.h, num, kTol);
-  // The velocity column carries the time offset; attitude columns the lever arm.
+  // The velocity column carries the time offset; attitude columns the lever arm;
+  // the scale column the distance; exactly the two offset states the range reads.
   EXPECT_GT(p.h.segment<3>(ErrIdx::kVel).norm(), Real(0));
   EXPECT_GT(p.h.segment<3>(ErrIdx::kAtt).norm(), Real(0.1));
+  EXPECT_NEAR(static_cast<double>(p.h(ErrIdx::kScale)), static_cast<double>(p.geometric_m), 1e-5);
+  EXPECT_EQ(p.h.tail<ErrIdx::kRange - 1>().sum(), Real(2));
+  EXPECT_EQ(p.h(ErrIdx::kTagBias + 1), Real(1));
+  EXPECT_EQ(p.h(ErrIdx::kAnchorBias + 2), Real(1));
+}
+
+TEST(MmRange, RangeErrorsAddToTheGeometricDistance) {
+  NominalState x;
+  x.range_err(0) = Real(0.001);
+  x.range_err(ErrIdx::kTagBias - ErrIdx::kCore + 1) = Real(0.05);
+  x.range_err(ErrIdx::kAnchorBias - ErrIdx::kCore + 2) = Real(0.1);
+  const Vec3 anchor(Real(30), Real(40), Real(0));  // 50 m away
+  const RangePrediction p = mm_range_predict(x, Mat3::Identity(), Vec3::Zero(), Vec3::Zero(), anchor, Real(0),
+                                             slots_tag1_anchor2());
+  ASSERT_TRUE(p.valid);
+  EXPECT_NEAR(static_cast<double>(p.geometric_m), 50.0, 1e-4);
+  // (1 + 0.001) 50 + 0.05 + 0.1 + 0.25 (commissioned)
+  EXPECT_NEAR(static_cast<double>(p.range_m), 50.05 + 0.05 + 0.1 + 0.25, 1e-4);
+  // Without slots only the geometry (and the scale) counts.
+  RangeErrorSlots none;
+  none.scale = false;
+  const RangePrediction g = mm_range_predict(x, Mat3::Identity(), Vec3::Zero(), Vec3::Zero(), anchor, Real(0), none);
+  EXPECT_NEAR(static_cast<double>(g.range_m), 50.0, 1e-4);
+  EXPECT_EQ(g.h.tail<ErrIdx::kRange>().squaredNorm(), Real(0));
 }
 
 TEST(MmRange, PredictsTagAtTheRangeTimeNotTheStateTime) {
   NominalState x;
   x.vel_nav_mps = Vec3(Real(10), Real(0), Real(0));
   const Vec3 anchor(Real(100), Real(0), Real(0));
-  const RangePrediction now = mm_range_predict(x, Mat3::Identity(), Vec3::Zero(), Vec3::Zero(), anchor, Real(0));
+  const RangeErrorSlots es;
+  const RangePrediction now = mm_range_predict(x, Mat3::Identity(), Vec3::Zero(), Vec3::Zero(), anchor, Real(0), es);
   const RangePrediction later =
-      mm_range_predict(x, Mat3::Identity(), Vec3::Zero(), Vec3::Zero(), anchor, Real(0.008));
+      mm_range_predict(x, Mat3::Identity(), Vec3::Zero(), Vec3::Zero(), anchor, Real(0.008), es);
   EXPECT_NEAR(static_cast<double>(now.range_m - later.range_m), 0.08, 1e-4);  // 10 m/s * 8 ms closer
 }
 
@@ -89,8 +129,8 @@ TEST(MmRange, TagOnTheAnchorIsInvalidAndFinite) {
   NominalState x;
   x.pos_nav_m = Vec3(Real(1), Real(2), Real(0));
   const Vec3 lever(Real(0), Real(0), Real(1.5));
-  const RangePrediction p =
-      mm_range_predict(x, Mat3::Identity(), Vec3::Zero(), lever, Vec3(Real(1), Real(2), Real(1.5)), Real(0));
+  const RangePrediction p = mm_range_predict(x, Mat3::Identity(), Vec3::Zero(), lever,
+                                             Vec3(Real(1), Real(2), Real(1.5)), Real(0), slots_tag1_anchor2());
   EXPECT_FALSE(p.valid);
   EXPECT_TRUE(p.h.allFinite());
   EXPECT_TRUE(std::isfinite(p.range_m));

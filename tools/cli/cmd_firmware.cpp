@@ -23,6 +23,7 @@
 #include "hal/host/socketcan_bus.hpp"
 #include "hal/host/stdio_serial.hpp"
 #include "tools/cli/args.hpp"
+#include "tools/cli/cal_option.hpp"
 #include "tools/dataset/recording.hpp"
 #include "tools/hil/clock_mapped_sources.hpp"
 
@@ -150,14 +151,16 @@ void print_summary(const RunSummary& s) {
 int cmd_firmware(int argc, char** argv) {
   Args args(argc, argv, {});
   const std::vector<std::string> known = {"--recording", "--can-link", "--can-if", "--console", "--params",
-                                          "--can-log",   "--duration", "--site",   "--param"};
+                                          "--can-log",   "--duration", "--site",   "--param",
+                                          "--cal"};
   const std::string console = args.get("--console", "stdio");
   const char* usage =
       "usage: uwbnav firmware [--recording DIR | --can-link PATH | --can-if NAME] [--site DIR]\n"
       "                       [--console stdio|pty|none] [--params FILE] [--can-log FILE] [--duration S]\n"
-      "                       [--param name=value]...\n"
+      "                       [--param name=value]... [--cal FILE]\n"
       "  sensors: --recording DIR replays DIR in real time; without it a HIL rig sends them over CAN\n"
-      "  (can.hil_rx_enable = 1) and --site DIR (a recording) gives the anchors and tags\n";
+      "  (can.hil_rx_enable = 1) and --site DIR (a recording) gives the anchors and tags\n"
+      "  --cal FILE: site range calibration loaded at start (uwbnav calibrate, docs/commissioning.md)\n";
   double duration_s = 0.0;
   if (args.has("--duration")) {
     const std::string text = args.get("--duration");  // keep alive: `end` points into it
@@ -195,6 +198,7 @@ int cmd_firmware(int argc, char** argv) {
     rec.imu.clear();
     rec.uwb.clear();
   }
+  if (!apply_cal_option(args, rec.site, "uwbnav firmware")) return 1;
   std::vector<std::pair<std::string, float>> overrides;
   for (const auto& p : args.all("--param")) {
     std::pair<std::string, float> kv;
@@ -284,7 +288,8 @@ int cmd_firmware(int argc, char** argv) {
     hal::Board board{imu, uwb, *bus, *serial, clock, *store, rec.site};
     auto app = std::make_unique<App>(board);
     if (!ok(app->init())) {
-      std::fprintf(stderr, "uwbnav firmware: the estimator rejected the site of %s\n", site_dir.c_str());
+      std::fprintf(stderr, "uwbnav firmware: the firmware rejected the site of %s (anchors/tags or range calibration)\n",
+                   site_dir.c_str());
       return 1;
     }
     for (const auto& [name, value] : overrides) {

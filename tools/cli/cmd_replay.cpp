@@ -1,5 +1,5 @@
-// `uwbnav replay DIR --out OUT [--param name=value]...` and `uwbnav run`
-// (the main job: simulate the default scenario, replay it, print the table).
+// `uwbnav replay DIR --out OUT [--param name=value]... [--cal FILE]` and
+// `uwbnav run` (the main job: simulate the default scenario, replay it, print the table).
 #include <sys/stat.h>
 
 #include <cerrno>
@@ -8,6 +8,7 @@
 #include <string>
 
 #include "tools/cli/args.hpp"
+#include "tools/cli/cal_option.hpp"
 #include "tools/dataset/fs.hpp"
 #include "tools/dataset/recording.hpp"
 #include "tools/eval/replay.hpp"
@@ -49,8 +50,10 @@ int replay_and_report(const dataset::Recording& rec, const std::string& out, con
 int cmd_replay(int argc, char** argv) {
   Args args(argc, argv, {"--progress"});
   if (!args.error().empty() || args.positional().size() != 1 || !args.has("--out") ||
-      !args.unknown({"--out", "--param", "--progress"}).empty()) {
-    std::fprintf(stderr, "usage: uwbnav replay DATASET_DIR --out OUT_DIR [--param name=value]... [--progress]\n");
+      !args.unknown({"--out", "--param", "--progress", "--cal"}).empty()) {
+    std::fprintf(stderr,
+                 "usage: uwbnav replay DATASET_DIR --out OUT_DIR [--param name=value]... [--cal FILE] [--progress]\n"
+                 "  --cal FILE: site range calibration (uwbnav calibrate, docs/commissioning.md)\n");
     return 2;
   }
   dataset::Recording rec;
@@ -62,6 +65,7 @@ int cmd_replay(int argc, char** argv) {
   }
   for (const auto& w : report.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   if (report.rows_skipped > 0) std::fprintf(stderr, "warning: %zu bad rows skipped\n", report.rows_skipped);
+  if (!apply_cal_option(args, rec.site, "uwbnav replay")) return 1;
   return replay_and_report(rec, args.get("--out"), args);
 }
 
@@ -69,8 +73,9 @@ int cmd_run(int argc, char** argv) {
   Args args(argc, argv, {"--progress"});
   uint64_t seed = 1;
   if (!args.error().empty() || args.positional().size() > 1 ||
-      !args.unknown({"--out", "--seed", "--param", "--progress"}).empty() || !args.get_u64("--seed", 1, &seed)) {
-    std::fprintf(stderr, "usage: uwbnav run [SCENARIO] [--out DIR] [--seed N] [--param name=value]...\n");
+      !args.unknown({"--out", "--seed", "--param", "--progress", "--cal"}).empty() ||
+      !args.get_u64("--seed", 1, &seed)) {
+    std::fprintf(stderr, "usage: uwbnav run [SCENARIO] [--out DIR] [--seed N] [--param name=value]... [--cal FILE]\n");
     return 2;
   }
   const std::string scenario = args.positional().empty() ? sim::preset_names().front() : args.positional()[0];
@@ -88,6 +93,7 @@ int cmd_run(int argc, char** argv) {
   }
   std::printf("scenario %s (seed %llu): %zu IMU samples, %zu ranges -> %s\n", scenario.c_str(),
               static_cast<unsigned long long>(seed), rec.imu.size(), rec.uwb.size(), rec_dir.c_str());
+  if (!apply_cal_option(args, rec.site, "uwbnav run")) return 1;
   return replay_and_report(rec, out, args);
 }
 

@@ -101,6 +101,8 @@ struct EstimateRow {
   double q_nav_body[4] = {1, 0, 0, 0};
   double pos_sigma_m[3] = {0, 0, 0};
   int status = 0;
+  int mode = 0;              // NavMode (in memory only; estimates.csv has no mode column)
+  double pos_xy_corr = 0.0;  // x/y position error correlation (in memory only)
 };
 [[nodiscard]] Status read_estimates(const std::string& path, std::vector<EstimateRow>& out, ReadReport& report);
 [[nodiscard]] Status read_ranges(const std::string& path, std::vector<RangeReport>& out, ReadReport& report);

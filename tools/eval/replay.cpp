@@ -80,6 +80,8 @@ dataset::EstimateRow to_estimate_row(const NavOutput& o) {
   r.pos_sigma_m[1] = o.pos_sigma_m.y;
   r.pos_sigma_m[2] = o.pos_sigma_m.z;
   r.status = static_cast<int>(o.status);
+  r.mode = static_cast<int>(o.mode);
+  r.pos_xy_corr = o.pos_xy_corr;
   return r;
 }
 
@@ -97,7 +99,7 @@ Status run_replay(const dataset::Recording& rec, const ReplayOptions& options, R
 
   App app(board);
   if (!ok(app.init())) {
-    if (error) *error = "estimator rejected the site configuration (anchors/tags)";
+    if (error) *error = "the firmware rejected the site configuration (anchors/tags, or an unusable range calibration)";
     return Status::kInvalidArgument;
   }
   for (const auto& [name, value] : options.params) {
