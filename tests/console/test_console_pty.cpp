@@ -220,7 +220,11 @@ TEST(ConsolePty, PersonAtATerminalQueriesTheFirmwareAndChangesLiveBehaviourWithP
   const size_t mark = term.screen().size();
   const std::string streamed = term.wait_for("$pos ", mark);
   EXPECT_NE(streamed.find("$pos t_us="), std::string::npos);
-  EXPECT_FALSE(lines_with_prefix(term.run("stream off"), "stream pos_hz=0").empty());
+  // While lines stream, the console redraws its prompt after each one, so the
+  // reply to "stream off" may come after a prompt: wait for the reply itself.
+  const size_t off_mark = term.screen().size();
+  (void)term.run("stream off");
+  EXPECT_NE(term.wait_for("stream pos_hz=0", off_mark).find("\nstream pos_hz=0"), std::string::npos);
 
   // Keep the session for docs/console.md and for debugging failures.
   std::ofstream(std::string(UWBNAV_BINARY_DIR) + "/console_pty_session.txt", std::ios::binary) << term.screen();

@@ -124,6 +124,8 @@ RecoveryCounts count_reinits(const NavDiagnostics& diag) {
   RecoveryCounts c;
   c.resets = diag.resets;
   c.reinits = diag.reinits;
+  c.inflations = diag.inflations;
+  c.reanchors = diag.reanchors;
   return c;
 }
 
@@ -237,7 +239,7 @@ CellSummary summarise_cell(const std::string& name, const std::vector<DriveMetri
   size_t epochs = 0, good = 0, hon = 0, in_h = 0, in_x = 0, in_y = 0, nees_n = 0, nees_in = 0, nis_n = 0, nis_in = 0;
   size_t err_n = 0, fb_n = 0;
   double nees_sum = 0, nis_sum = 0, fb_sq = 0;
-  uint64_t resets = 0, reinits = 0, used = 0, rejected = 0;
+  uint64_t resets = 0, reinits = 0, inflations = 0, reanchors = 0, used = 0, rejected = 0;
   Confusion conf;
   for (const DriveMetrics& d : drives) {
     ++c.drives;
@@ -266,6 +268,8 @@ CellSummary summarise_cell(const std::string& name, const std::vector<DriveMetri
     nis_sum += d.nis_sum;
     resets += d.recoveries.resets;
     reinits += d.recoveries.reinits;
+    inflations += d.recoveries.inflations;
+    reanchors += d.recoveries.reanchors;
     fb_n += d.fallback_n;
     fb_sq += d.fallback_sq_sum;
     used += d.ranges_used;
@@ -289,6 +293,8 @@ CellSummary summarise_cell(const std::string& name, const std::vector<DriveMetri
   c.nis_in = ratio(static_cast<double>(nis_in), static_cast<double>(nis_n));
   c.resets_per_h = ratio(static_cast<double>(resets), c.hours);
   c.reinits_per_h = ratio(static_cast<double>(reinits), c.hours);
+  c.inflations_per_h = ratio(static_cast<double>(inflations), c.hours);
+  c.reanchors_per_h = ratio(static_cast<double>(reanchors), c.hours);
   c.fallback_share = ratio(static_cast<double>(fb_n), static_cast<double>(err_n));
   c.fallback_rmse = fb_n > 0 ? std::sqrt(fb_sq / static_cast<double>(fb_n)) : std::nan("");
   c.fused_share = ratio(static_cast<double>(used), static_cast<double>(used + rejected));
@@ -354,7 +360,8 @@ void print_family_tables(std::FILE* f, const std::vector<CellSummary>& rows, boo
                   num(c.max_worst, 2), num(c.p95_med, 3), pct(c.availability), num(c.gap_max_s, 1),
                   num(c.ttfe_med_s, 1), num(c.ttfe_max_s, 1)});
     t2.push_back({c.name, pct(c.in2s_h), pct(c.in2s_x), pct(c.in2s_y), num(c.nees_mean, 2), pct(c.nees_in),
-                  num(c.nis_mean, 2), pct(c.nis_in), num(c.resets_per_h, 1), num(c.reinits_per_h, 1),
+                  num(c.nis_mean, 2), pct(c.nis_in), num(c.resets_per_h, 1), num(c.inflations_per_h, 1),
+                  num(c.reanchors_per_h, 1), num(c.reinits_per_h, 1),
                   pct(c.fallback_share), num(c.fallback_rmse, 3), pct(c.fused_share), pct(c.nlos_precision),
                   pct(c.nlos_recall)});
   }
@@ -368,7 +375,7 @@ void print_family_tables(std::FILE* f, const std::vector<CellSummary>& rows, boo
                markdown ? "**" : "", markdown ? "**" : "");
   print_table(f,
               {"cell", "in 2sig h", "in 2sig x", "in 2sig y", "NEES mean", "NEES<=5.99", "NIS mean", "NIS<=3.84",
-               "resets/h", "reinits/h", "fallback", "fallback RMSE [m]", "fused", "NLOS P", "NLOS R"},
+               "resets/h", "inflate/h", "re-anchor/h", "re-align/h", "fallback", "fallback RMSE [m]", "fused", "NLOS P", "NLOS R"},
               t2, markdown);
 }
 

@@ -18,8 +18,10 @@ namespace uwbnav::eval {
 // Recoveries of the estimator by kind. One place that reads them from the
 // diagnostics, so new kinds of recovery are counted everywhere at once.
 struct RecoveryCounts {
-  uint64_t resets = 0;   // covariance/state resets (non-finite, exploding)
-  uint64_t reinits = 0;  // re-initialisations after divergence
+  uint64_t resets = 0;      // hard resets (non-finite or exploded state)
+  uint64_t reinits = 0;     // re-alignments of the IMU filter (ranges-only output meanwhile)
+  uint64_t inflations = 0;  // divergence met by covariance inflation
+  uint64_t reanchors = 0;   // divergence met by re-anchoring to the ranges
 };
 RecoveryCounts count_reinits(const NavDiagnostics& diag);
 
@@ -73,7 +75,8 @@ struct CellSummary {
   double in2s_h = 0.0, in2s_x = 0.0, in2s_y = 0.0;
   double nees_mean = 0.0, nees_in = 0.0;
   double nis_mean = 0.0, nis_in = 0.0;
-  double resets_per_h = 0.0, reinits_per_h = 0.0;
+  double resets_per_h = 0.0, reinits_per_h = 0.0;  // per hour of drive
+  double inflations_per_h = 0.0, reanchors_per_h = 0.0;
   double fallback_share = 0.0, fallback_rmse = 0.0;
   double fused_share = 0.0;
   double nlos_precision = 0.0, nlos_recall = 0.0;

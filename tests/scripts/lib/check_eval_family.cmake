@@ -6,7 +6,7 @@ if(NOT rc EQUAL 0)
   message(FATAL_ERROR "uwbnav eval family failed (${rc}):\n${out}\n${err}")
 endif()
 foreach(pattern "| ground_los " "| trolley3 " "| all cells " "TUNING set" "reporting 1000-1999"
-                "NEES mean" "NIS mean" "reinits/h" "fallback" "wall time")
+                "NEES mean" "NIS mean" "inflate/h" "re-anchor/h" "re-align/h" "fallback" "wall time")
   string(FIND "${out}" "${pattern}" pos)
   if(pos EQUAL -1)
     message(FATAL_ERROR "eval family output lacks '${pattern}':\n${out}")
