@@ -1,0 +1,332 @@
+// Monte-Carlo consistency of each model of the error-state EKF (issue 13 item 4):
+// truths are drawn from the filter's own prior and driven by the noise the
+// model claims; the normalised estimation error squared (NEES) averaged over
+// the runs must then be chi-square with the state's dimension. A model whose
+// Jacobian, process noise or update is wrong shows as a mean NEES outside the
+// two-sided 99.9 % band of that distribution.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <vector>
+
+#include "estimator/ekf_core.hpp"
+#include "estimator/mm_height.hpp"
+#include "estimator/mm_nhc.hpp"
+#include "estimator/mm_range.hpp"
+#include "estimator/mm_zupt.hpp"
+
+namespace uwbnav {
+namespace {
+
+using Rng = std::mt19937_64;
+
+// The error-state injection used by EkfCore (ekf_state.hpp conventions).
+NominalState inject(const NominalState& x, const ErrVec& dx) {
+  NominalState y = x;
+  y.pos_nav_m += dx.segment<3>(ErrIdx::kPos);
+  y.vel_nav_mps += dx.segment<3>(ErrIdx::kVel);
+  y.q_nav_body = quat_normalised(quat_mul(quat_exp(dx.segment<3>(ErrIdx::kAtt)), x.q_nav_body));
+  y.ba_body_mps2 += dx.segment<3>(ErrIdx::kBa);
+  y.bg_body_radps += dx.segment<3>(ErrIdx::kBg);
+  y.range_err += dx.tail<ErrIdx::kRange>();
+  return y;
+}
+
+// truth (-) estimate as an error-state vector (attitude: small angle of C_true C_est^T).
+Eigen::VectorXd error_of(const NominalState& truth, const NominalState& est) {
+  Eigen::VectorXd e(kN);
+  const Mat3 dc = quat_to_dcm(truth.q_nav_body) * quat_to_dcm(est.q_nav_body).transpose();
+  const Vec3 dtheta(Real(0.5) * (dc(2, 1) - dc(1, 2)), Real(0.5) * (dc(0, 2) - dc(2, 0)),
+                    Real(0.5) * (dc(1, 0) - dc(0, 1)));
+  for (int i = 0; i < 3; ++i) {
+    e(ErrIdx::kPos + i) = static_cast<double>(truth.pos_nav_m(i) - est.pos_nav_m(i));
+    e(ErrIdx::kVel + i) = static_cast<double>(truth.vel_nav_mps(i) - est.vel_nav_mps(i));
+    e(ErrIdx::kAtt + i) = static_cast<double>(dtheta(i));
+    e(ErrIdx::kBa + i) = static_cast<double>(truth.ba_body_mps2(i) - est.ba_body_mps2(i));
+    e(ErrIdx::kBg + i) = static_cast<double>(truth.bg_body_radps(i) - est.bg_body_radps(i));
+  }
+  for (int i = 0; i < ErrIdx::kRange; ++i) e(ErrIdx::kCore + i) = static_cast<double>(truth.range_err(i) - est.range_err(i));
+  return e;
+}
+
+// NEES of the states `idx` (error e, covariance p).
+double nees(const Eigen::VectorXd& e, const ErrCov& p, const std::vector<int>& idx) {
+  const int n = static_cast<int>(idx.size());
+  Eigen::MatrixXd s(n, n);
+  Eigen::VectorXd v(n);
+  for (int i = 0; i < n; ++i) {
+    v(i) = e(idx[static_cast<size_t>(i)]);
+    for (int j = 0; j < n; ++j) s(i, j) = static_cast<double>(p(idx[static_cast<size_t>(i)], idx[static_cast<size_t>(j)]));
+  }
+  return v.dot(s.ldlt().solve(v));
+}
+
+// Mean NEES over `runs` runs of an n-dimensional state is chi2(runs n) / runs:
+// mean n, standard deviation sqrt(2 n / runs). 3.3 sigma ~ two-sided 99.9 %.
+void expect_chi2_mean(double mean_nees, int n, int runs, const char* what) {
+  const double sd = std::sqrt(2.0 * n / runs);
+  std::printf("%s: mean NEES %.3f for %d states over %d runs (band %.3f..%.3f)\n", what, mean_nees, n, runs,
+              n - 3.3 * sd, n + 3.3 * sd);
+  EXPECT_GT(mean_nees, n - 3.3 * sd) << what << ": covariance pessimistic";
+  EXPECT_LT(mean_nees, n + 3.3 * sd) << what << ": covariance optimistic";
+}
+
+// A draw from N(0, diag(sigma^2)).
+ErrVec draw(Rng& rng, const ErrVec& sigma) {
+  std::normal_distribution<double> n01(0.0, 1.0);
+  ErrVec d;
+  for (int i = 0; i < kN; ++i) d(i) = static_cast<Real>(n01(rng)) * sigma(i);
+  return d;
+}
+
+std::vector<int> indices(int first, int count) {
+  std::vector<int> v;
+  for (int i = 0; i < count; ++i) v.push_back(first + i);
+  return v;
+}
+
+// Four anchors around a tag 1.7 m high; anchor k reads anchor-offset slot k.
+const Vec3 kAnchors[4] = {Vec3(0, 0, Real(2.5)), Vec3(30, 0, Real(1.5)), Vec3(30, 20, Real(3)), Vec3(0, 20, Real(1))};
+
+ErrVec range_prior_sigma() {
+  ErrVec s = ErrVec::Constant(Real(1e-6));
+  s.segment<3>(ErrIdx::kPos) = Vec3(Real(0.3), Real(0.3), Real(0.2));
+  s(ErrIdx::kScale) = Real(0.003);
+  s(ErrIdx::kTagBias) = Real(0.1);
+  for (int k = 0; k < 4; ++k) s(ErrIdx::kAnchorBias + k) = Real(0.1);
+  return s;
+}
+
+// One run of range updates at 8 tag positions (the tag is carried from one to
+// the next exactly: the filter's position moves by the same known step), so
+// that offsets, scale and position are partly separable.
+void run_range_updates(Rng& rng, bool consider, ErrCov* p_out, Eigen::VectorXd* e_out) {
+  constexpr Real kSigmaRange_m = Real(0.05);
+  const ErrVec sigma0 = range_prior_sigma();
+  NominalState est;
+  est.pos_nav_m = Vec3(Real(8), Real(6), Real(1.7));
+  const NominalState truth0 = inject(est, draw(rng, sigma0));
+  NominalState truth = truth0;
+  EkfCore ekf;
+  ekf.init(est, sigma0);
+  std::normal_distribution<double> noise(0.0, static_cast<double>(kSigmaRange_m));
+  const Mat3 c = Mat3::Identity();
+  Vec3 prev_step = Vec3::Zero();
+  for (int stop = 0; stop < 8; ++stop) {
+    // Truth and estimate move by the same known step.
+    const Vec3 step(Real(2.5) * static_cast<Real>(stop % 4), Real(2) * static_cast<Real>(stop / 4), Real(0));
+    truth.pos_nav_m = truth0.pos_nav_m + step;
+    ekf.mutable_state().pos_nav_m += step - prev_step;
+    prev_step = step;
+    for (int k = 0; k < 4; ++k) {
+      RangeErrorSlots slots;
+      slots.tag_index = 0;
+      slots.anchor_slot = k;
+      const RangePrediction truth_pred = mm_range_predict(truth, c, Vec3::Zero(), Vec3::Zero(), kAnchors[k], 0, slots);
+      const Real measured = truth_pred.range_m + static_cast<Real>(noise(rng));
+      const RangePrediction pred = mm_range_predict(ekf.state(), c, Vec3::Zero(), Vec3::Zero(), kAnchors[k], 0, slots);
+      ASSERT_TRUE(pred.valid);
+      (void)ekf.prepare(pred.h);
+      ASSERT_TRUE(ekf.update_prepared(measured - pred.range_m, kSigmaRange_m * kSigmaRange_m, consider).applied);
+    }
+  }
+  *p_out = ekf.cov();
+  *e_out = error_of(truth, ekf.state());
+}
+
+TEST(ConsistencyMc, RangeUpdatesWithScaleAndOffsetStatesAreChiSquareConsistent) {
+  // GIVEN truths drawn from the prior (position 0.3 m, scale 0.3 %, tag and
+  // anchor offsets 0.1 m) and ranges made with the model plus 5 cm noise
+  Rng rng(13);
+  constexpr int kRuns = 400;
+  double sum = 0.0;
+  std::vector<int> idx = indices(ErrIdx::kPos, 3);
+  idx.push_back(ErrIdx::kScale);
+  idx.push_back(ErrIdx::kTagBias);
+  for (int k = 0; k < 4; ++k) idx.push_back(ErrIdx::kAnchorBias + k);
+  for (int r = 0; r < kRuns; ++r) {
+    ErrCov p;
+    Eigen::VectorXd e;
+    // WHEN the filter fuses them, learning every range error
+    run_range_updates(rng, false, &p, &e);
+    if (HasFatalFailure()) return;
+    sum += nees(e, p, idx);
+  }
+  // THEN position, scale and offsets are chi-square consistent
+  expect_chi2_mean(sum / kRuns, static_cast<int>(idx.size()), kRuns, "range updates, errors estimated");
+}
+
+TEST(ConsistencyMc, SchmidtConsiderRangeUpdatesKeepThePositionConsistent) {
+  // GIVEN the same truths, the range errors treated as consider states
+  Rng rng(14);
+  constexpr int kRuns = 400;
+  double sum_pos = 0.0;
+  double sum_consider = 0.0;
+  const std::vector<int> pos = indices(ErrIdx::kPos, 3);
+  std::vector<int> cons;
+  cons.push_back(ErrIdx::kScale);
+  cons.push_back(ErrIdx::kTagBias);
+  for (int k = 0; k < 4; ++k) cons.push_back(ErrIdx::kAnchorBias + k);
+  for (int r = 0; r < kRuns; ++r) {
+    ErrCov p;
+    Eigen::VectorXd e;
+    // WHEN the filter fuses them without estimating the range errors
+    run_range_updates(rng, true, &p, &e);
+    if (HasFatalFailure()) return;
+    sum_pos += nees(e, p, pos);
+    sum_consider += nees(e, p, cons);
+  }
+  // THEN the estimated position is consistent, and the consider states keep
+  // their prior (their error is the truth's deviation from zero)
+  expect_chi2_mean(sum_pos / kRuns, 3, kRuns, "Schmidt consider, position");
+  expect_chi2_mean(sum_consider / kRuns, static_cast<int>(cons.size()), kRuns, "Schmidt consider, range errors");
+}
+
+TEST(ConsistencyMc, ConstantVelocityPredictionCoversWhiteAccelerationTruths) {
+  // GIVEN truths that accelerate with white noise of the claimed density
+  // (integrated in 1 ms steps) from a prior of 0.2 m / 0.5 m/s
+  Rng rng(15);
+  constexpr int kRuns = 600;
+  constexpr Real kPsd = Real(1.5);      // [m/s^2/sqrt(Hz)]
+  constexpr Real kHorizon_s = Real(2);  // one prediction over 2 s
+  constexpr int kSub = 2000;
+  ErrVec sigma0 = ErrVec::Constant(Real(1e-6));
+  sigma0.segment<3>(ErrIdx::kPos).setConstant(Real(0.2));
+  sigma0.segment<3>(ErrIdx::kVel).setConstant(Real(0.5));
+  NominalState est;
+  est.pos_nav_m = Vec3(Real(3), Real(-4), Real(1));
+  est.vel_nav_mps = Vec3(Real(4), Real(1), Real(0));
+  std::normal_distribution<double> n01(0.0, 1.0);
+  double sum = 0.0;
+  const double h = static_cast<double>(kHorizon_s) / kSub;
+  for (int r = 0; r < kRuns; ++r) {
+    const NominalState t0 = inject(est, draw(rng, sigma0));
+    Eigen::Vector3d p, v;
+    for (int i = 0; i < 3; ++i) {
+      p(i) = static_cast<double>(t0.pos_nav_m(i));
+      v(i) = static_cast<double>(t0.vel_nav_mps(i));
+    }
+    for (int k = 0; k < kSub; ++k) {
+      Eigen::Vector3d a;
+      for (int i = 0; i < 3; ++i) a(i) = n01(rng) * static_cast<double>(kPsd) / std::sqrt(h);
+      p += v * h + 0.5 * a * h * h;
+      v += a * h;
+    }
+    NominalState truth = t0;
+    truth.pos_nav_m = p.cast<Real>();
+    truth.vel_nav_mps = v.cast<Real>();
+    // WHEN the filter predicts once over the whole horizon
+    EkfCore ekf;
+    ekf.init(est, sigma0);
+    ekf.predict_cv(kHorizon_s, kPsd, Real(0));
+    sum += nees(error_of(truth, ekf.state()), ekf.cov(), indices(ErrIdx::kPos, 6));
+  }
+  // THEN its position and velocity covariance matches the spread
+  expect_chi2_mean(sum / kRuns, 6, kRuns, "constant-velocity prediction");
+}
+
+TEST(ConsistencyMc, ImuPredictionCoversNoisyAndBiasedImuTruths) {
+  // GIVEN truths drawn from the prior (including accelerometer and gyro
+  // biases) that turn and accelerate, and the IMU they would measure: true
+  // rate and force plus bias plus white noise of the claimed densities
+  Rng rng(16);
+  constexpr int kRuns = 300;
+  constexpr Real kDt_s = Real(0.01);
+  constexpr int kSteps = 500;  // 5 s
+  constexpr Real kG = Real(9.80665);
+  ImuNoise nz;
+  nz.accel_noise = Real(0.02);
+  nz.gyro_noise = Real(0.002);
+  nz.accel_bias_rw = Real(0.002);
+  nz.gyro_bias_rw = Real(1e-4);
+  ErrVec sigma0 = ErrVec::Constant(Real(1e-6));
+  sigma0.segment<3>(ErrIdx::kPos).setConstant(Real(0.1));
+  sigma0.segment<3>(ErrIdx::kVel).setConstant(Real(0.1));
+  sigma0.segment<3>(ErrIdx::kAtt) = Vec3(Real(0.01), Real(0.01), Real(0.03));
+  sigma0.segment<3>(ErrIdx::kBa).setConstant(Real(0.05));
+  sigma0.segment<3>(ErrIdx::kBg).setConstant(Real(0.002));
+  NominalState est;
+  est.pos_nav_m = Vec3(Real(5), Real(2), Real(1));
+  est.vel_nav_mps = Vec3(Real(3), Real(0), Real(0));
+  est.q_nav_body = quat_from_yaw(Real(0.3));
+  const Vec3 force_body(Real(0.8), Real(0.3), kG);  // accelerating and turning
+  const Vec3 rate_body(Real(0), Real(0), Real(0.15));
+  std::normal_distribution<double> n01(0.0, 1.0);
+  auto white = [&](Real density) -> Vec3 {
+    return Vec3(static_cast<Real>(n01(rng)), static_cast<Real>(n01(rng)), static_cast<Real>(n01(rng))) *
+           (density / std::sqrt(kDt_s));
+  };
+  double sum = 0.0;
+  for (int r = 0; r < kRuns; ++r) {
+    NominalState t = inject(est, draw(rng, sigma0));
+    EkfCore truth;
+    truth.init(t, ErrVec::Constant(Real(1e-6)));
+    EkfCore ekf;
+    ekf.init(est, sigma0);
+    for (int k = 0; k < kSteps; ++k) {
+      // The truth moves with the true force and rate: its own mechanisation fed
+      // with them plus its biases (which it subtracts again).
+      const NominalState& ts = truth.state();
+      const Vec3 f_meas = force_body + ts.ba_body_mps2;
+      const Vec3 w_meas = rate_body + ts.bg_body_radps;
+      truth.predict_imu(f_meas, w_meas, kDt_s, kG, ImuNoise{});
+      ekf.predict_imu(f_meas + white(nz.accel_noise), w_meas + white(nz.gyro_noise), kDt_s, kG, nz);
+      // Bias random walks of the truth.
+      NominalState tb = truth.state();
+      tb.ba_body_mps2 += white(nz.accel_bias_rw) * kDt_s;
+      tb.bg_body_radps += white(nz.gyro_bias_rw) * kDt_s;
+      truth.mutable_state() = tb;
+    }
+    sum += nees(error_of(truth.state(), ekf.state()), ekf.cov(), indices(0, ErrIdx::kCore));
+  }
+  // WHEN the filter propagates 5 s on the noisy IMU THEN its 15 core states are consistent
+  expect_chi2_mean(sum / kRuns, ErrIdx::kCore, kRuns, "IMU prediction");
+}
+
+TEST(ConsistencyMc, ConstraintUpdatesKeepTheCoreConsistent) {
+  // GIVEN truths from the prior of a moving ground vehicle and the constraint
+  // pseudo-measurements it satisfies up to their claimed noise: zero lateral and
+  // vertical body velocity (NHC) and a known height
+  Rng rng(17);
+  constexpr int kRuns = 400;
+  ErrVec sigma0 = ErrVec::Constant(Real(1e-6));
+  sigma0.segment<3>(ErrIdx::kPos).setConstant(Real(0.3));
+  sigma0.segment<3>(ErrIdx::kVel).setConstant(Real(0.3));
+  sigma0.segment<3>(ErrIdx::kAtt) = Vec3(Real(0.01), Real(0.01), Real(0.05));
+  NominalState est;
+  est.pos_nav_m = Vec3(Real(5), Real(2), Real(0));
+  est.vel_nav_mps = Vec3(Real(6), Real(2), Real(0));
+  est.q_nav_body = quat_from_yaw(std::atan2(Real(2), Real(6)));
+  constexpr Real kNhcSigma = Real(0.05);
+  constexpr Real kHeightSigma = Real(0.05);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  double sum = 0.0;
+  for (int r = 0; r < kRuns; ++r) {
+    const NominalState t = inject(est, draw(rng, sigma0));
+    const Mat3 ct = quat_to_dcm(t.q_nav_body);
+    const Vec3 v_body_true = ct.transpose() * t.vel_nav_mps;
+    EkfCore ekf;
+    ekf.init(est, sigma0);
+    // Each pseudo-measurement as its model reads it at the truth, plus noise:
+    // innovation = (truth value + noise) - model value at the estimate.
+    for (int axis = 1; axis <= 2; ++axis) {
+      ScalarObs obs = mm_nhc(ekf.state(), ekf.dcm(), axis, kNhcSigma);
+      const Real model_at_est = -obs.innovation;  // mm_nhc: innovation = 0 - v_body(axis)
+      obs.innovation = v_body_true(axis) + static_cast<Real>(n01(rng)) * kNhcSigma - model_at_est;
+      ASSERT_TRUE(ekf.update(obs).applied);
+    }
+    ScalarObs hobs = mm_height(ekf.state(), Real(0), kHeightSigma);
+    const Real h_model = -hobs.innovation;  // mm_height: innovation = ref - z
+    hobs.innovation = t.pos_nav_m.z() + static_cast<Real>(n01(rng)) * kHeightSigma - h_model;
+    ASSERT_TRUE(ekf.update(hobs).applied);
+    sum += nees(error_of(t, ekf.state()), ekf.cov(), indices(0, 9));
+  }
+  // THEN position, velocity and attitude stay chi-square consistent
+  expect_chi2_mean(sum / kRuns, 9, kRuns, "NHC + height updates");
+}
+
+}  // namespace
+}  // namespace uwbnav
