@@ -89,6 +89,8 @@ inline dataset::Recording truncated(const dataset::Recording& full, double secon
 // An App on a replay board whose serial port is a MemSerialPort.
 class ConsoleRig {
  public:
+  // The rig replays the recording by reference: it must outlive the rig.
+  explicit ConsoleRig(dataset::Recording&&, hal::ParamStore* = nullptr) = delete;
   explicit ConsoleRig(const dataset::Recording& rec, hal::ParamStore* store = nullptr)
       : sources_(rec),
         board_{sources_.imu, sources_.uwb, can, serial, clock_, store != nullptr ? *store : empty_, rec.site},

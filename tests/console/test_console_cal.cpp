@@ -13,7 +13,8 @@ namespace uwbnav::testing {
 namespace {
 
 TEST(ConsoleCal, UncalibratedSiteSaysSoInOneLine) {
-  ConsoleRig rig(truncated(sim_recording(), 1.0));
+  const dataset::Recording rec = truncated(sim_recording(), 1.0);
+  ConsoleRig rig(rec);
   const auto lines = reply_lines(rig.command("cal"));
   ASSERT_EQ(lines.size(), 1U);
   EXPECT_EQ(lines[0], "cal status=uncalibrated pairs=0");
