@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "estimator/ekf_core.hpp"
+#include "error_injection.hpp"
 #include "estimator/mm_height.hpp"
 #include "estimator/mm_nhc.hpp"
 #include "estimator/mm_range.hpp"
@@ -23,17 +24,7 @@ namespace {
 
 using Rng = std::mt19937_64;
 
-// The error-state injection used by EkfCore (ekf_state.hpp conventions).
-NominalState inject(const NominalState& x, const ErrVec& dx) {
-  NominalState y = x;
-  y.pos_nav_m += dx.segment<3>(ErrIdx::kPos);
-  y.vel_nav_mps += dx.segment<3>(ErrIdx::kVel);
-  y.q_nav_body = quat_normalised(quat_mul(quat_exp(dx.segment<3>(ErrIdx::kAtt)), x.q_nav_body));
-  y.ba_body_mps2 += dx.segment<3>(ErrIdx::kBa);
-  y.bg_body_radps += dx.segment<3>(ErrIdx::kBg);
-  y.range_err += dx.tail<ErrIdx::kRange>();
-  return y;
-}
+using test::inject;
 
 // truth (-) estimate as an error-state vector (attitude: small angle of C_true C_est^T).
 Eigen::VectorXd error_of(const NominalState& truth, const NominalState& est) {

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <functional>
 
+#include "error_injection.hpp"
 #include "estimator/mm_height.hpp"
 #include "estimator/mm_nhc.hpp"
 #include "estimator/mm_range.hpp"
@@ -15,17 +16,7 @@
 namespace uwbnav {
 namespace {
 
-// The error-state injection used by EkfCore (ekf_state.hpp conventions).
-NominalState inject(const NominalState& x, const ErrVec& dx) {
-  NominalState y = x;
-  y.pos_nav_m += dx.segment<3>(ErrIdx::kPos);
-  y.vel_nav_mps += dx.segment<3>(ErrIdx::kVel);
-  y.q_nav_body = quat_normalised(quat_mul(quat_exp(dx.segment<3>(ErrIdx::kAtt)), x.q_nav_body));
-  y.ba_body_mps2 += dx.segment<3>(ErrIdx::kBa);
-  y.bg_body_radps += dx.segment<3>(ErrIdx::kBg);
-  y.range_err += dx.tail<ErrIdx::kRange>();
-  return y;
-}
+using test::inject;
 
 // Central-difference Jacobian of h(x) w.r.t. the error state.
 ErrRow numeric_jacobian(const NominalState& x, const std::function<double(const NominalState&)>& h) {

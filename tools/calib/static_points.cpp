@@ -51,14 +51,8 @@ Status parse_static_points(const std::string& text, const std::string& name, std
   size_t pos = 0;
   size_t line_no = 0;
   bool header = false;
-  while (pos < text.size()) {
-    size_t nl = text.find('\n', pos);
-    if (nl == std::string::npos) nl = text.size();
-    std::string line = text.substr(pos, nl - pos);
-    pos = nl + 1;
-    ++line_no;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line_no == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);
+  std::string line;
+  while (dataset::csv::next_line(text, pos, line_no, line)) {
     const std::string t = trim(line);
     if (t.empty() || t[0] == '#') continue;
     if (!header) {

@@ -152,14 +152,8 @@ Status parse_calibration(const std::string& text, const std::string& name, Calib
   bool header = false;
   size_t sigma_line = 0;
   std::vector<std::string> keys;
-  while (pos < text.size()) {
-    size_t nl = text.find('\n', pos);
-    if (nl == std::string::npos) nl = text.size();
-    std::string line = text.substr(pos, nl - pos);
-    pos = nl + 1;
-    ++line_no;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line_no == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);
+  std::string line;
+  while (csv::next_line(text, pos, line_no, line)) {
     if (!magic) {
       if (trim(line) != kCalibrationMagic) {
         err.add(line_no, "first line must be '" + std::string(kCalibrationMagic) + "' (not a calibration file, or " +

@@ -54,6 +54,18 @@ void warn(ReadReport& report, const std::string& name, size_t line, const std::s
   }
 }
 
+bool next_line(const std::string& text, size_t& pos, size_t& line_no, std::string& line) {
+  if (pos >= text.size()) return false;
+  size_t nl = text.find('\n', pos);
+  if (nl == std::string::npos) nl = text.size();
+  line.assign(text, pos, nl - pos);
+  pos = nl + 1;
+  ++line_no;
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  if (line_no == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);
+  return true;
+}
+
 std::string quote(const char* p, size_t n) {
   std::string s = "'";
   for (size_t i = 0; i < n && i < kQuoteMax; ++i) {

@@ -30,6 +30,11 @@ struct Columns {
 // `report`, respecting the cap.
 void warn(ReadReport& report, const std::string& name, size_t line, const std::string& reason);
 
+// The next physical line of `text` from `pos` (advanced past it) with a
+// trailing CR and, on line 1, a UTF-8 byte-order mark removed; `line_no`
+// counts from 1. False at the end of the text.
+bool next_line(const std::string& text, size_t& pos, size_t& line_no, std::string& line);
+
 // Printable, truncated copy of raw file bytes for messages.
 std::string quote(const char* p, size_t n);
 
