@@ -214,8 +214,13 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix) {
   if (st != Status::kOk) return false;
   fix.t_us = t_us;
   fix.tag_pos_nav_m = to_vec3(ls.pos_nav_m);
-  fix.sigma_h_m = std::sqrt(static_cast<Real>(ls.cov_nav_m2[0][0] + ls.cov_nav_m2[1][1]));
-  fix.sigma_v_m = opt.two_d ? Real(-1) : std::sqrt(static_cast<Real>(ls.cov_nav_m2[2][2]));
+  // A posteriori variance factor of the adjustment: residuals larger than the
+  // ranges' sigmas explain (an NLOS range the test let through, a wrong local
+  // solution) scale the fix's covariance up, never down.
+  const Real var_factor = ls.dof > 0 ? std::fmax(Real(1), static_cast<Real>(ls.weighted_ssr) / static_cast<Real>(ls.dof))
+                                     : Real(1);
+  fix.sigma_h_m = std::sqrt(var_factor * static_cast<Real>(ls.cov_nav_m2[0][0] + ls.cov_nav_m2[1][1]));
+  fix.sigma_v_m = opt.two_d ? Real(-1) : std::sqrt(var_factor * static_cast<Real>(ls.cov_nav_m2[2][2]));
   fix.yaw_rel_rad = quat_yaw(q_init_);
   fix.tag_index = tag_index;
   return std::isfinite(fix.sigma_h_m);
