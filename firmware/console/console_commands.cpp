@@ -6,6 +6,7 @@
 
 #include "estimator/nlos/svm_model.hpp"
 #include "estimator/params.hpp"
+#include "firmware/param_text.hpp"
 #include "firmware/app.hpp"
 #include "firmware/console/console.hpp"
 #include "firmware/text_format.hpp"
@@ -387,25 +388,11 @@ void Console::cmd_param(size_t argc, char** argv) {
     return;
   }
   if (argc == 4 && std::strcmp(sub, "set") == 0) {
-    const ParamDef* p = Params::find(argv[2]);
-    if (p == nullptr) {
-      error("param: unknown parameter '%s' (see param list)", argv[2]);
-      return;
-    }
-    const Result<float> parsed = parse_decimal_float(argv[3]);
-    if (!parsed.ok()) {
-      error("param: '%s' is not a finite number; %s unchanged", argv[3], p->name);
-      return;
-    }
-    const float v = parsed.value();
-    if (v < p->min || v > p->max) {
-      begin_error();
-      add("param: %s", p->name);
-      add_general("=", v);
-      add_general(" out of range [", p->min);
-      add_general(", ", p->max);
-      add("]; unchanged");
-      reply_end();
+    const ParamDef* p = nullptr;
+    float v = 0.0F;
+    char why[kParamErrorMax];
+    if (!ok(parse_param_value(argv[2], argv[3], &p, &v, why, sizeof why))) {
+      error("param: %s; unchanged", why);
       return;
     }
     const float old = app_.params().get(p->index);

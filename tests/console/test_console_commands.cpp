@@ -15,6 +15,7 @@
 #include "console_rig.hpp"
 #include "estimator/params.hpp"
 #include "firmware/console/console.hpp"
+#include "firmware/param_text.hpp"
 #include "firmware/console/log.hpp"
 
 namespace uwbnav {
@@ -243,6 +244,30 @@ TEST(ConsoleCommands, BadParamValuesAreRejectedWithOneErrorLineAndLeaveTheParame
   }
   const auto lines = reply_lines(rig.command("param set can.tx_enable 2"));
   EXPECT_EQ(lines.at(0), "error: param: can.tx_enable=2 out of range [0, 1]; unchanged");
+}
+
+// The console and the CLI (--param, tests/scripts/cli_errors.cmake) refuse with the
+// same words (firmware/param_text.hpp): which parameter, which value, why.
+TEST(ConsoleCommands, FractionsOfWholeKindParametersAreRefusedInTheCliWording) {
+  ConsoleRig rig(sim_recording());
+  const Params before = rig.app.params();
+  EXPECT_EQ(reply_lines(rig.command("param set can.tx_enable 0.5")).at(0),
+            "error: param: can.tx_enable=0.5 is not a whole number (bool parameter); unchanged");
+  EXPECT_EQ(reply_lines(rig.command("param set gate.policy 3.5")).at(0),
+            "error: param: gate.policy=3.5 is not a whole number (enum parameter); unchanged");
+  EXPECT_EQ(reply_lines(rig.command("param set uwb.sigma abc")).at(0),
+            "error: param: uwb.sigma=abc is not a finite number; unchanged");
+  EXPECT_EQ(reply_lines(rig.command("param set uwb.sigma 9")).at(0),
+            "error: param: uwb.sigma=9 out of range [0.01, 5]; unchanged");
+  EXPECT_TRUE(params_equal(rig.app.params(), before));
+  char why[kParamErrorMax];
+  const ParamDef* def = nullptr;
+  float value = 0.0F;
+  ASSERT_FALSE(ok(parse_param_assignment("gate.policy=3.5", &def, &value, why, sizeof why)));
+  EXPECT_STREQ(why, "gate.policy=3.5 is not a whole number (enum parameter)");
+  ASSERT_TRUE(ok(parse_param_assignment("gate.policy=3", &def, &value, why, sizeof why)));
+  EXPECT_EQ(def->index, ParamId::kGatePolicy);
+  EXPECT_EQ(value, 3.0F);
 }
 
 TEST(ConsoleCommands, ParamSaveAndLoadGoThroughTheParameterStore) {

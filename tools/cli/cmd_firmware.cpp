@@ -200,14 +200,7 @@ int cmd_firmware(int argc, char** argv) {
   }
   if (!apply_cal_option(args, rec.site, "uwbnav firmware")) return 1;
   std::vector<std::pair<std::string, float>> overrides;
-  for (const auto& p : args.all("--param")) {
-    std::pair<std::string, float> kv;
-    if (!parse_param_override(p, &kv)) {
-      std::fprintf(stderr, "uwbnav firmware: --param expects name=value, got '%s'\n", p.c_str());
-      return 2;
-    }
-    overrides.push_back(kv);
-  }
+  if (!parse_param_options(args, "uwbnav firmware", &overrides)) return 2;
 
   install_signal_handlers();
   const uint64_t t_start_mono_us = clock_us(CLOCK_MONOTONIC);
@@ -293,9 +286,9 @@ int cmd_firmware(int argc, char** argv) {
       return 1;
     }
     for (const auto& [name, value] : overrides) {
-      const ParamDef* d = Params::find(name.c_str());
+      const ParamDef* d = Params::find(name.c_str());  // checked by parse_param_options
       if (d == nullptr || !ok(app->set_param(d->index, value))) {
-        std::fprintf(stderr, "uwbnav firmware: bad parameter %s=%g\n", name.c_str(), static_cast<double>(value));
+        std::fprintf(stderr, "uwbnav firmware: param: %s refused by the firmware\n", name.c_str());
         return 2;
       }
     }
