@@ -84,7 +84,40 @@ void App::reset_filter() {
   validator_.reset_history();
 }
 
-void App::reset_stats() { stats_ = AppStats{}; }
+void App::reset_stats() {
+  stats_ = AppStats{};
+  can_tx_.reset_stats();
+  can_decoder_.reset_stats();
+  nav_base_ = nav_.diagnostics();
+  can_base_ = board_.can.counters();
+}
+
+NavDiagnostics App::nav_counters() const {
+  NavDiagnostics d = nav_.diagnostics();
+  const NavDiagnostics& b = nav_base_;
+  d.imu_samples -= b.imu_samples;
+  d.ranges_received -= b.ranges_received;
+  d.ranges_used -= b.ranges_used;
+  d.ranges_rejected -= b.ranges_rejected;
+  d.resets -= b.resets;
+  d.reinits -= b.reinits;
+  d.inflations -= b.inflations;
+  d.reanchors -= b.reanchors;
+  d.integrity_fails -= b.integrity_fails;
+  d.operator_resets -= b.operator_resets;
+  return d;
+}
+
+hal::CanCounters App::can_counters() const {
+  hal::CanCounters c = board_.can.counters();
+  c.tx_ok -= can_base_.tx_ok;
+  c.tx_dropped -= can_base_.tx_dropped;
+  c.rx_ok -= can_base_.rx_ok;
+  c.rx_overflow -= can_base_.rx_overflow;
+  c.error_frames -= can_base_.error_frames;
+  c.bus_off -= can_base_.bus_off;
+  return c;
+}
 
 void App::record_cycle_timing(uint32_t work_us, uint32_t jitter_us, bool overrun) {
   LoopStats& l = stats_.loop;

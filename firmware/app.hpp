@@ -72,7 +72,16 @@ class App {
   [[nodiscard]] Status load_params();
 
   void reset_filter();
+  // Zeroes every counter the console shows: input validation and loop timing,
+  // CAN publisher and HIL decoder, and - as offsets from this moment, since the
+  // estimator and the bus driver count monotonically - the navigator's and the
+  // bus's counters (nav_counters(), can_counters()). CAN diagnostics frames keep
+  // carrying the monotonic navigator counts.
   void reset_stats();
+  // The navigator's diagnostics with its counters taken since the last reset_stats().
+  NavDiagnostics nav_counters() const;
+  // The CAN bus driver's counters since the last reset_stats().
+  hal::CanCounters can_counters() const;
 
   const AppStats& stats() const { return stats_; }
   const Navigator& navigator() const { return nav_; }
@@ -103,6 +112,8 @@ class App {
   can::CanSensorSample can_pending_[kMaxCanPending];  // HIL samples due in a later cycle
   size_t can_pending_count_ = 0;
   AppStats stats_;
+  NavDiagnostics nav_base_;        // navigator counters at the last reset_stats()
+  hal::CanCounters can_base_;      // bus counters at the last reset_stats()
   AppObserver* observer_ = nullptr;
   NavOutput last_output_;
   uint64_t last_tick_us_ = 0;

@@ -13,6 +13,8 @@
 #include "estimator/navigator.hpp"
 #include "estimator/types.hpp"
 #include "firmware/app_stats.hpp"
+#include "firmware/can/publisher.hpp"
+#include "firmware/can/sensor_decoder.hpp"
 #include "firmware/console/byte_ring.hpp"
 #include "firmware/console/line_editor.hpp"
 #include "firmware/console/log.hpp"
@@ -73,6 +75,8 @@ class Console final : public LogSink {
   void reset_stats() { stats_ = ConsoleStats{}; }
   // Bytes queued for the port.
   size_t tx_pending() const { return tx_.size(); }
+  // Input read but not yet handled, a multi-line reply in progress, or output queued.
+  bool busy() const { return rx_pos_ < rx_len_ || job_ != Job::kNone || !tx_.empty(); }
   uint32_t stream_rate_hz(StreamKind kind) const { return stream_rate_hz_[static_cast<size_t>(kind)]; }
 
   void log_line(LogLevel level, const char* text, size_t len) override;
@@ -93,6 +97,8 @@ class Console final : public LogSink {
     AppStats app;
     NavDiagnostics nav;
     hal::CanCounters can;
+    can::CanTxStats can_tx;
+    can::CanSensorStats can_rx;
     hal::CanBusState can_state = hal::CanBusState::kDown;
     uint64_t t_us = 0;
     size_t num_anchors = 0;
@@ -164,8 +170,10 @@ class Console final : public LogSink {
   bool step_history(size_t step);
   bool step_cal(size_t step);
   void add_param(size_t index, bool with_doc);
+  bool param_listed(size_t index) const;
   void add_param_change(const ParamDef& p, float old);
   void add_pos_fields();
+  void add_reset_fields(const NavDiagnostics& dg);
   void add_anchor_fields(const AnchorStatus& a);
   void stream_anchor_lines();
 
@@ -192,6 +200,9 @@ class Console final : public LogSink {
   uint64_t pending_drop_bytes_ = 0;       // dropped since the last marker
 
   Snapshot snap_;
+  char list_glob_[48] = {};               // `param list GLOB` ("" lists all)
+  bool list_changed_only_ = false;        // `param list -c`: only values differing from the default
+  size_t list_cursor_ = 0;                // next parameter index the list job looks at
   Job job_ = Job::kNone;
   size_t job_step_ = 0;
   bool job_verbose_ = false;

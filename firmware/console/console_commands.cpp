@@ -89,7 +89,7 @@ const Console::Command Console::kCommands[] = {
     {"anchors", "anchors", "per anchor: last range, innovation, NLOS probability, LOS/NLOS counts, state",
      &Console::cmd_anchors},
     {"ekf", "ekf [-v]", "state vector and covariance diagonal (-v: full 15x15 covariance)", &Console::cmd_ekf},
-    {"param", "param list|get NAME|set NAME VALUE|save|load|reset [NAME]",
+    {"param", "param list [-c] [GLOB]|get NAME|set NAME VALUE|save|load|reset [NAME]",
      "parameters (bounds-checked, applied live; save/load: parameter store)", &Console::cmd_param},
     {"log", "log level [error|warn|info|debug]", "show or set the log level (param console.log_level)",
      &Console::cmd_log},
@@ -162,22 +162,33 @@ void Console::cmd_status(size_t argc, char**) {
     error("status: takes no arguments");
     return;
   }
-  const NavDiagnostics& dg = app_.navigator().diagnostics();
+  const NavDiagnostics dg = app_.nav_counters();
+  const NavDiagnostics& raw = app_.navigator().diagnostics();  // times are not counters
   const uint64_t now = app_.last_tick_us();
   begin("status");
   add_pos_fields();
-  if (dg.last_imu_t_us == 0 || dg.last_imu_t_us > now) {
+  if (raw.last_imu_t_us == 0 || raw.last_imu_t_us > now) {
     add(" imu_age_ms=none");
   } else {
-    add_u64(" imu_age_ms=", (now - dg.last_imu_t_us) / 1000U);
+    add_u64(" imu_age_ms=", (now - raw.last_imu_t_us) / 1000U);
   }
-  if (dg.last_range_used_t_us == 0 || dg.last_range_used_t_us > now) {
+  if (raw.last_range_used_t_us == 0 || raw.last_range_used_t_us > now) {
     add(" uwb_age_ms=none");
   } else {
-    add_u64(" uwb_age_ms=", (now - dg.last_range_used_t_us) / 1000U);
+    add_u64(" uwb_age_ms=", (now - raw.last_range_used_t_us) / 1000U);
   }
-  add(" used_total=%lu resets=%lu", ul(dg.ranges_used), ul(dg.resets));
+  add(" used_total=%lu", ul(dg.ranges_used));
+  add_reset_fields(dg);
   reply_end();
+}
+
+// Every kind of reset and recovery, since start or `reset stats`: hard resets
+// (non-finite or exploded state), operator resets (`reset filter`), and the
+// recovery ladder (inflations, re-anchors, re-alignments), integrity failures.
+void Console::add_reset_fields(const NavDiagnostics& dg) {
+  add(" resets=%lu operator_resets=%lu inflations=%lu reanchors=%lu reinits=%lu integrity_fails=%lu",
+      ul(dg.resets), ul(dg.operator_resets), ul(dg.inflations), ul(dg.reanchors), ul(dg.reinits),
+      ul(dg.integrity_fails));
 }
 
 void Console::cmd_stats(size_t argc, char**) {
@@ -218,14 +229,17 @@ bool Console::step_stats(size_t step) {
       add(" state=%s tx_ok=%lu tx_dropped=%lu bus_off=%lu rx_ok=%lu rx_overflow=%lu error_frames=%lu",
           can_state_name(snap_.can_state), ul(c.tx_ok), ul(c.tx_dropped), ul(c.bus_off), ul(c.rx_ok),
           ul(c.rx_overflow), ul(c.error_frames));
+      add(" pub_sent=%lu pub_dropped=%lu pub_failed=%lu hil_frames=%lu hil_crc=%lu hil_lost=%lu",
+          ul(snap_.can_tx.sent), ul(snap_.can_tx.dropped), ul(snap_.can_tx.failed), ul(snap_.can_rx.frames),
+          ul(snap_.can_rx.crc_errors), ul(snap_.can_rx.frames_lost));
       break;
     }
     case 5: {
       const NavDiagnostics& dg = snap_.nav;
       begin("stats nav");
-      add(" imu_samples=%lu ranges_received=%lu ranges_used=%lu ranges_rejected=%lu resets=%lu reinits=%lu",
-          ul(dg.imu_samples), ul(dg.ranges_received), ul(dg.ranges_used), ul(dg.ranges_rejected), ul(dg.resets),
-          ul(dg.reinits));
+      add(" imu_samples=%lu ranges_received=%lu ranges_used=%lu ranges_rejected=%lu", ul(dg.imu_samples),
+          ul(dg.ranges_received), ul(dg.ranges_used), ul(dg.ranges_rejected));
+      add_reset_fields(dg);
       break;
     }
     default: {
@@ -357,22 +371,75 @@ void Console::add_param_change(const ParamDef& p, float old) {
   reply_end();
 }
 
+namespace {
+
+// Shell-style glob: '*' any run of characters, '?' one character, others literal.
+bool glob_match(const char* pattern, const char* text) {
+  const char* star = nullptr;  // last '*' seen in the pattern
+  const char* resume = text;   // where the text resumes after that '*'
+  while (*text != '\0') {
+    if (*pattern == '*') {
+      star = pattern++;
+      resume = text;
+    } else if (*pattern == '?' || *pattern == *text) {
+      ++pattern;
+      ++text;
+    } else if (star != nullptr) {
+      pattern = star + 1;
+      text = ++resume;
+    } else {
+      return false;
+    }
+  }
+  while (*pattern == '*') ++pattern;
+  return *pattern == '\0';
+}
+
+}  // namespace
+
+bool Console::param_listed(size_t index) const {
+  const ParamDef& p = kParamDefs[index];
+  if (list_changed_only_ && app_.params().get(p.index) == p.def) return false;
+  return list_glob_[0] == '\0' || glob_match(list_glob_, p.name);
+}
+
+// `param list [-c] [GLOB]`: a count line, then one line per listed parameter.
 bool Console::step_param_list(size_t step) {
   if (step == 0) {
+    size_t n = 0;
+    for (size_t i = 0; i < kNumParams; ++i) n += param_listed(i) ? 1U : 0U;
     begin("param");
-    add(" count=%lu", static_cast<unsigned long>(kNumParams));
+    add(" count=%lu", static_cast<unsigned long>(n));
     reply_end();
-    return kNumParams > 0;
+    list_cursor_ = 0;
+    while (list_cursor_ < kNumParams && !param_listed(list_cursor_)) ++list_cursor_;
+    return list_cursor_ < kNumParams;
   }
   begin("param");
-  add_param(step - 1, false);
+  add_param(list_cursor_, false);
   reply_end();
-  return step < kNumParams;
+  ++list_cursor_;
+  while (list_cursor_ < kNumParams && !param_listed(list_cursor_)) ++list_cursor_;
+  return list_cursor_ < kNumParams;
 }
 
 void Console::cmd_param(size_t argc, char** argv) {
   const char* sub = argc >= 2 ? argv[1] : "";
-  if (argc == 2 && std::strcmp(sub, "list") == 0) {
+  if (argc >= 2 && argc <= 4 && std::strcmp(sub, "list") == 0) {
+    bool changed_only = false;
+    const char* glob = "";
+    for (size_t i = 2; i < argc; ++i) {
+      if (std::strcmp(argv[i], "-c") == 0 && !changed_only) {
+        changed_only = true;
+      } else if (glob[0] == '\0' && argv[i][0] != '-' && std::strlen(argv[i]) < sizeof list_glob_) {
+        glob = argv[i];
+      } else {
+        error("param: usage: param list [-c] [GLOB] (e.g. param list gate.*, param list -c)");
+        return;
+      }
+    }
+    list_changed_only_ = changed_only;
+    std::strcpy(list_glob_, glob);
     start_job(Job::kParamList, false);
     return;
   }
@@ -440,7 +507,7 @@ void Console::cmd_param(size_t argc, char** argv) {
     add_param_change(*p, old);
     return;
   }
-  error("param: usage: param list|get NAME|set NAME VALUE|save|load|reset [NAME]");
+  error("param: usage: param list [-c] [GLOB]|get NAME|set NAME VALUE|save|load|reset [NAME]");
 }
 
 void Console::cmd_log(size_t argc, char** argv) {

@@ -80,10 +80,16 @@ TEST(ConsoleCommands, VersionShowsBuildGitHashAndChecksums) {
 TEST(ConsoleCommands, StatusReportsTheLastOutputAndSensorAges) {
   ConsoleRig rig(sim_recording());
   rig.run_s(20.0);
-  const auto lines = reply_lines(rig.command("status"));
+  // The reply describes the cycle that ran the command; its line (with every
+  // reset counter) is longer than one cycle's TX budget, so it ends a cycle later.
+  rig.serial.output.clear();
+  rig.serial.type("status\r");
+  rig.tick();
+  const NavOutput o = rig.app.last_output();
+  for (int i = 0; i < 5; ++i) rig.tick();
+  const auto lines = reply_lines(rig.serial.output);
   ASSERT_EQ(lines.size(), 1U);
   const std::string& l = lines[0];
-  const NavOutput& o = rig.app.last_output();
   EXPECT_EQ(kv(l, "mode"), nav_status_name(o.status));
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.3f", static_cast<double>(o.pos_nav_m.x));
@@ -363,6 +369,82 @@ TEST(ConsoleCommands, ResetStatsZeroesTheCountersAndResetFilterRestartsTheEstima
   rig.tick();  // the output of the cycle after the reset
   EXPECT_EQ(rig.app.last_output().status, NavStatus::kInitialising);
   EXPECT_EQ(reply_lines(rig.command("reset everything")).at(0), "error: reset: usage: reset filter|stats");
+}
+
+TEST(ConsoleCommands, StatusCountsEveryKindOfResetIncludingTheOperatorsResetFilter) {
+  ConsoleRig rig(sim_recording());
+  rig.run_s(10.0);
+  const NavDiagnostics& dg = rig.app.navigator().diagnostics();
+  auto status = [&]() { return reply_lines(rig.command("status")).at(0); };
+  std::string l = status();
+  EXPECT_EQ(kv(l, "operator_resets"), "0");
+  EXPECT_EQ(kv(l, "resets"), std::to_string(dg.resets));
+  EXPECT_EQ(kv(l, "inflations"), std::to_string(dg.inflations));
+  EXPECT_EQ(kv(l, "reanchors"), std::to_string(dg.reanchors));
+  EXPECT_EQ(kv(l, "reinits"), std::to_string(dg.reinits));
+  EXPECT_EQ(kv(l, "integrity_fails"), std::to_string(dg.integrity_fails));
+  (void)rig.command("reset filter");
+  (void)rig.command("reset filter");
+  l = status();
+  EXPECT_EQ(kv(l, "operator_resets"), "2");
+  const auto stats = reply_lines(rig.command("stats"));
+  EXPECT_EQ(kv(lines_with_prefix(stats, "stats nav ").at(0), "operator_resets"), "2");
+}
+
+TEST(ConsoleCommands, ResetStatsZeroesInputCanNavigatorAndConsoleCounters) {
+  ConsoleRig rig(sim_recording());
+  rig.run_s(15.0);
+  (void)rig.command("reset filter");
+  auto stats = reply_lines(rig.command("stats"));
+  const std::string nav_before = lines_with_prefix(stats, "stats nav ").at(0);
+  const std::string can_before = lines_with_prefix(stats, "stats can ").at(0);
+  ASSERT_GT(kv_num(nav_before, "ranges_used"), 100.0);
+  ASSERT_GT(kv_num(can_before, "tx_ok"), 500.0);
+  ASSERT_GT(kv_num(can_before, "pub_sent"), 500.0);
+  EXPECT_EQ(kv(nav_before, "operator_resets"), "1");
+  EXPECT_EQ(reply_lines(rig.command("reset stats")).at(0), "reset stats=ok");
+  stats = reply_lines(rig.command("stats"));  // runs a few cycles: counts since the reset only
+  const std::string nav = lines_with_prefix(stats, "stats nav ").at(0);
+  const std::string can = lines_with_prefix(stats, "stats can ").at(0);
+  EXPECT_LT(kv_num(nav, "ranges_used"), 20.0);
+  EXPECT_LT(kv_num(nav, "imu_samples"), 100.0);
+  EXPECT_EQ(kv(nav, "operator_resets"), "0");
+  EXPECT_LT(kv_num(can, "tx_ok"), 100.0);
+  EXPECT_LT(kv_num(can, "pub_sent"), 100.0);
+  EXPECT_LT(kv_num(lines_with_prefix(stats, "stats src=").at(0), "received"), 100.0);
+  EXPECT_EQ(kv(reply_lines(rig.command("status")).at(0), "operator_resets"), "0");
+  // The estimator and the bus keep counting monotonically (CAN diagnostics carry those).
+  EXPECT_EQ(rig.app.navigator().diagnostics().operator_resets, 1U);
+}
+
+TEST(ConsoleCommands, ParamListFiltersByGlobAndByChangedFromDefault) {
+  ConsoleRig rig(sim_recording());
+  size_t gate = 0;
+  for (const ParamDef& d : kParamDefs) gate += std::string(d.name).rfind("gate.", 0) == 0 ? 1U : 0U;
+  ASSERT_GT(gate, 2U);
+  auto lines = reply_lines(rig.command("param list gate.*"));
+  ASSERT_EQ(lines.size(), gate + 1);
+  EXPECT_EQ(kv(lines[0], "count"), std::to_string(gate));
+  for (size_t i = 1; i < lines.size(); ++i) EXPECT_EQ(kv(lines[i], "name").rfind("gate.", 0), 0U) << lines[i];
+  lines = reply_lines(rig.command("param list -c"));
+  ASSERT_EQ(lines.size(), 1U);
+  EXPECT_EQ(lines[0], "param count=0");
+  (void)rig.command("param set uwb.sigma 0.3");
+  (void)rig.command("param set gate.innov_sigma 9");
+  lines = reply_lines(rig.command("param list -c"));
+  ASSERT_EQ(lines.size(), 3U);
+  EXPECT_EQ(kv(lines[1], "name"), "uwb.sigma");
+  EXPECT_EQ(kv(lines[2], "name"), "gate.innov_sigma");
+  lines = reply_lines(rig.command("param list -c gate.*"));
+  ASSERT_EQ(lines.size(), 2U);
+  EXPECT_EQ(kv(lines[1], "name"), "gate.innov_sigma");
+  lines = reply_lines(rig.command("param list uwb.sig?a"));
+  ASSERT_EQ(lines.size(), 2U);
+  EXPECT_EQ(kv(lines[1], "value"), "0.3");
+  EXPECT_EQ(reply_lines(rig.command("param list no.such.*")).at(0), "param count=0");
+  EXPECT_EQ(reply_lines(rig.command("param list -x")).at(0).rfind("error: param: usage: param list [-c] [GLOB]", 0),
+            0U);
+  EXPECT_EQ(reply_lines(rig.command("param list")).size(), kNumParams + 1);  // no filter left behind
 }
 
 TEST(ConsoleCommands, HistoryListsAndBangBangRepeats) {

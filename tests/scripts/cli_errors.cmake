@@ -92,6 +92,12 @@ maneuver = turn 90 3
     "-DARGS=eval|family|--param|gate.policy=3.5" -DRC=2
     "-DERR=^uwbnav eval family: param: gate.policy=3.5 is not a whole number \\(enum parameter\\)\n$")
 
+  # stdio console: end of input ends the session cleanly, after the replies went out.
+  file(WRITE ${cli_dir}/console_input.txt "status\nparam list -c\nparam set uwb.sigma 0.2\nparam list -c\n")
+  cli_check(cli_firmware_stdio_console_ends_the_session_at_end_of_input
+    "-DARGS=firmware|--recording|${cli_dir}/rec" -DINPUT=${cli_dir}/console_input.txt -DRC=0
+    "-DOUT=status t_us=.*operator_resets=0 .*param count=0.*param name=uwb.sigma value=0.2 old=0.1.*param count=1.*stopped \\(end of console input\\)")
+
   # Help: exit 0, usage on stdout, for every command (and eval's subcommands).
   cli_check(cli_help_lists_commands "-DARGS=help" -DRC=0 "-DOUT=usage: uwbnav <command>.*replay")
   foreach(cmd run sim replay eval train-svm firmware hil params calibrate)

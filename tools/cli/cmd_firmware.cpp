@@ -54,16 +54,27 @@ uint64_t clock_us(clockid_t id) {
   return static_cast<uint64_t>(ts.tv_sec) * 1000000U + static_cast<uint64_t>(ts.tv_nsec) / 1000U;
 }
 
-// Ends the run when the replayed recording is exhausted; reports a rig that went away.
+// Ends the run when the replayed recording is exhausted or the stdio console's
+// input ended (once the console has answered and flushed, at most 2 s later);
+// reports a rig that went away.
 class RunWatch final : public AppObserver {
  public:
-  RunWatch(const hal::ImuSource& imu, const hal::UwbSource& uwb, bool replay, const hal::CanBus& bus, bool link)
-      : imu_(imu), uwb_(uwb), replay_(replay), bus_(bus), link_(link) {}
+  RunWatch(const hal::ImuSource& imu, const hal::UwbSource& uwb, bool replay, const hal::CanBus& bus, bool link,
+           const hal::StdioSerialPort* stdio, const Console& console)
+      : imu_(imu), uwb_(uwb), replay_(replay), bus_(bus), link_(link), stdio_(stdio), console_(console) {}
   void on_range(const RangeReport&) override {}
   void on_output(const NavOutput&) override {
     if (replay_ && imu_.finished() && uwb_.finished()) {
       end_of_recording = true;
       g_stop = true;
+    }
+    if (stdio_ != nullptr && stdio_->input_closed()) {
+      ++cycles_since_eof_;
+      idle_cycles_ = console_.busy() ? 0 : idle_cycles_ + 1;
+      if (idle_cycles_ >= kIdleCyclesToStop || cycles_since_eof_ >= kMaxCyclesAfterEof) {
+        end_of_input = true;
+        g_stop = true;
+      }
     }
     if (link_ && !reported_down_ && bus_.state() == hal::CanBusState::kDown) {
       reported_down_ = true;
@@ -71,13 +82,20 @@ class RunWatch final : public AppObserver {
     }
   }
   bool end_of_recording = false;
+  bool end_of_input = false;
 
  private:
+  static constexpr uint32_t kIdleCyclesToStop = 5;      // console idle this long after end of input
+  static constexpr uint32_t kMaxCyclesAfterEof = 200;   // 2 s: a stream keeps it busy forever
   const hal::ImuSource& imu_;
   const hal::UwbSource& uwb_;
   bool replay_;
   const hal::CanBus& bus_;
   bool link_;
+  const hal::StdioSerialPort* stdio_;
+  const Console& console_;
+  uint32_t cycles_since_eof_ = 0;
+  uint32_t idle_cycles_ = 0;
   bool reported_down_ = false;
 };
 
@@ -247,6 +265,9 @@ int cmd_firmware(int argc, char** argv) {
     if (console == "stdio") {
       stdio_serial = std::make_unique<hal::StdioSerialPort>();
       serial = stdio_serial.get();
+      if (stdio_serial->raw_terminal()) {
+        std::printf("firmware: console on this terminal (raw: Ctrl-C drops the line, Ctrl-D ends the session)\n");
+      }
     } else if (console == "pty") {
       std::string err;
       if (!ok(pty_serial.open(&err))) {
@@ -294,12 +315,13 @@ int cmd_firmware(int argc, char** argv) {
     }
     if (!replay && !ok(app->set_param(ParamId::kCanHilRxEnable, 1.0F))) return 1;
 
-    RunWatch watch(imu, uwb, replay, *bus, link);
+    RunWatch watch(imu, uwb, replay, *bus, link, stdio_serial.get(), app->console());
     app->set_observer(&watch);
-    std::printf("firmware: running (%s sensors, CAN %s%s), stop with Ctrl-C\n",
+    std::printf("firmware: running (%s sensors, CAN %s%s), stop with Ctrl-C%s\n",
                 replay ? "recording" : "HIL CAN",
                 socketcan ? args.get("--can-if").c_str() : (link ? "link" : "in memory"),
-                args.has("--can-log") ? ", logged" : "");
+                args.has("--can-log") ? ", logged" : "",
+                stdio_serial != nullptr ? " (outside a raw terminal) or end of console input" : "");
     std::fflush(stdout);
     RealtimeLoop loop(*app, clock);
     const uint64_t now_us = clock_us(CLOCK_MONOTONIC);
@@ -312,7 +334,8 @@ int cmd_firmware(int argc, char** argv) {
     summary.can_rx = app->can_rx_stats();
     summary.bus = bus->counters();
     summary.why = g_signal != 0 ? (g_signal == SIGINT ? "SIGINT" : "SIGTERM")
-                                : (watch.end_of_recording ? "end of recording" : "duration");
+                                : (watch.end_of_recording ? "end of recording"
+                                                          : (watch.end_of_input ? "end of console input" : "duration"));
     if (can_log.is_open()) ignore_status(can_log.close());
   }
   summary.wall_s = static_cast<double>(clock_us(CLOCK_MONOTONIC) - t_start_mono_us) * 1e-6;

@@ -4,6 +4,7 @@
 #   RC        expected exit status
 #   OUT       regular expression the stdout must match (optional)
 #   ERR       regular expression the stderr must match (optional)
+#   INPUT     a file fed to the command's stdin (optional)
 #   ABSENT    a path that must not exist afterwards (optional; removed before the run)
 #   PREPARE   "mkdir|DIR" (a fresh empty directory) or "copy|SRC|DST" (fresh copy of a
 #             recording), then EDIT edits inside DST:
@@ -43,7 +44,10 @@ endif()
 if(DEFINED ABSENT)
   file(REMOVE_RECURSE ${ABSENT})
 endif()
-execute_process(COMMAND ${UWBNAV} ${argv} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT DEFINED INPUT)
+  set(INPUT /dev/null)
+endif()
+execute_process(COMMAND ${UWBNAV} ${argv} INPUT_FILE ${INPUT} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 set(shown "uwbnav ${ARGS}\n--- exit ${rc}\n--- stdout:\n${out}\n--- stderr:\n${err}")
 if(NOT rc STREQUAL "${RC}")
   message(FATAL_ERROR "exit status ${rc}, expected ${RC}\n${shown}")
