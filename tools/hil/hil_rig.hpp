@@ -28,6 +28,8 @@ struct RigOptions {
   const volatile bool* stop = nullptr;         // set (e.g. by SIGINT) to end playback early
   hal::CandumpLogWriter* rx_log = nullptr;     // every frame read from the bus
   hal::CandumpLogWriter* tx_log = nullptr;     // every frame the rig sent
+  std::FILE* progress = nullptr;               // a progress line every progress_every_us while playing
+  uint64_t progress_every_us = 5000000;
 };
 
 // What one run produced; the stream and monitor stay alive for the report.
@@ -86,6 +88,18 @@ struct HilReport {
   bool interrupted = false;
   bool link_closed = false;
 };
+
+// Pass/fail bounds of `uwbnav hil --max-*` (a negative bound: not checked).
+struct HilLimits {
+  double max_missing = -1.0;         // missing + E2E failures + group mismatches
+  double max_latency_ms = -1.0;      // the largest end-to-end latency
+  double max_latency_p99_ms = -1.0;  // the 99th percentile of the end-to-end latency
+  double max_rmse_m = -1.0;          // horizontal RMSE of the received positions
+};
+
+// One line per requested check, "CHECK passed: ..." or "CHECK FAILED: ...",
+// naming the quantity, its value and the bound; *failures counts the failed ones.
+std::vector<std::string> check_report(const HilReport& r, const HilLimits& limits, int* failures);
 
 // Builds the report. lockstep: run the same recording in lockstep for reference.
 HilReport build_report(const dataset::Recording& rec, const RigRun& run, bool lockstep);
