@@ -124,6 +124,9 @@ void App::record_cycle_timing(uint32_t work_us, uint32_t jitter_us, bool overrun
   if (l.cycles == 0 || work_us < l.cycle_min_us) l.cycle_min_us = work_us;
   if (work_us > l.cycle_max_us) l.cycle_max_us = work_us;
   if (jitter_us > l.jitter_max_us) l.jitter_max_us = jitter_us;
+  const uint32_t latency_us = jitter_us + work_us;
+  if (latency_us > l.latency_max_us) l.latency_max_us = latency_us;
+  ++l.latency_hist[latency_bin(latency_us)];
   l.cycle_sum_us += work_us;
   ++l.cycles;
   if (overrun) ++l.overruns;

@@ -211,19 +211,28 @@ bool Console::step_stats(size_t step) {
           ul(l.cycle_max_us), ul(l.jitter_max_us));
       break;
     }
-    case 1:
+    case 1: {
+      // Cycle latency (deadline to end of work) histogram: counts per bin "le<upper_us>", then "gt<last>".
+      const LoopStats& l = s.loop;
+      begin("stats latency");
+      add(" max_us=%lu", ul(l.latency_max_us));
+      for (uint32_t i = 0; i + 1 < kNumLatencyBins; ++i) add(" le%lu=%lu", ul(kLatencyBinUpperUs[i]), ul(l.latency_hist[i]));
+      add(" gt%lu=%lu", ul(kLatencyBinUpperUs[kNumLatencyBins - 2]), ul(l.latency_hist[kNumLatencyBins - 1]));
+      break;
+    }
     case 2:
-    case 3: {
-      const SourceStats& src = step == 1 ? s.imu : (step == 2 ? s.uwb : s.can_rx);
+    case 3:
+    case 4: {
+      const SourceStats& src = step == 2 ? s.imu : (step == 3 ? s.uwb : s.can_rx);
       begin("stats src=");
-      add("%s received=%lu accepted=%lu io_errors=%lu", step == 1 ? "imu" : (step == 2 ? "uwb" : "can_rx"),
+      add("%s received=%lu accepted=%lu io_errors=%lu", step == 2 ? "imu" : (step == 3 ? "uwb" : "can_rx"),
           ul(src.received), ul(src.accepted), ul(src.io_errors));
       for (uint32_t r = 0; r < kNumRejectReasons; ++r) {
         add(" %s=%lu", reject_reason_name(static_cast<RejectReason>(r)), ul(src.rejected[r]));
       }
       break;
     }
-    case 4: {
+    case 5: {
       const hal::CanCounters& c = snap_.can;
       begin("stats can");
       add(" state=%s tx_ok=%lu tx_dropped=%lu bus_off=%lu rx_ok=%lu rx_overflow=%lu error_frames=%lu",
@@ -234,7 +243,7 @@ bool Console::step_stats(size_t step) {
           ul(snap_.can_rx.crc_errors), ul(snap_.can_rx.frames_lost));
       break;
     }
-    case 5: {
+    case 6: {
       const NavDiagnostics& dg = snap_.nav;
       begin("stats nav");
       add(" imu_samples=%lu ranges_received=%lu ranges_used=%lu ranges_rejected=%lu", ul(dg.imu_samples),

@@ -109,38 +109,45 @@ TEST(ConsoleCommands, StatsShowsLoopSourcesRejectsCanNavAndConsoleCounters) {
   rig.run_s(5.0);
   const uint32_t tx_before = rig.can.counters().tx_ok;  // the firmware keeps sending while the reply goes out
   const auto lines = reply_lines(rig.command("stats"));
-  ASSERT_EQ(lines.size(), 7U);
+  ASSERT_EQ(lines.size(), 8U);
   const AppStats& s = rig.app.stats();
   EXPECT_EQ(lines[0].rfind("stats loop ", 0), 0U);
   EXPECT_EQ(kv(lines[0], "overruns"), "1");
   EXPECT_EQ(kv(lines[0], "cycle_min_us"), "120");
   EXPECT_EQ(kv(lines[0], "cycle_avg_us"), "300");
   EXPECT_EQ(kv(lines[0], "cycle_max_us"), "480");
-  EXPECT_EQ(kv(lines[1], "src"), "imu");
-  EXPECT_EQ(kv(lines[2], "src"), "uwb");
-  EXPECT_EQ(kv(lines[3], "src"), "can_rx");
-  EXPECT_EQ(kv(lines[2], "received"), std::to_string(s.uwb.received));
-  EXPECT_EQ(kv(lines[2], "accepted"), std::to_string(s.uwb.accepted));
+  // Cycle latency = start lateness + work: 125 us and 489 us, both in the le500 bin.
+  EXPECT_EQ(lines[1].rfind("stats latency ", 0), 0U);
+  EXPECT_EQ(kv(lines[1], "max_us"), "489");
+  EXPECT_EQ(kv(lines[1], "le200"), "1");
+  EXPECT_EQ(kv(lines[1], "le500"), "1");
+  EXPECT_EQ(kv(lines[1], "le50"), "0");
+  EXPECT_EQ(kv(lines[1], "gt50000"), "0");
+  EXPECT_EQ(kv(lines[2], "src"), "imu");
+  EXPECT_EQ(kv(lines[3], "src"), "uwb");
+  EXPECT_EQ(kv(lines[4], "src"), "can_rx");
+  EXPECT_EQ(kv(lines[3], "received"), std::to_string(s.uwb.received));
+  EXPECT_EQ(kv(lines[3], "accepted"), std::to_string(s.uwb.accepted));
   for (uint32_t r = 0; r < kNumRejectReasons; ++r) {
     const char* name = reject_reason_name(static_cast<RejectReason>(r));
-    EXPECT_EQ(kv(lines[2], name), std::to_string(s.uwb.rejected[r])) << name;
+    EXPECT_EQ(kv(lines[3], name), std::to_string(s.uwb.rejected[r])) << name;
   }
-  EXPECT_EQ(lines[4].rfind("stats can ", 0), 0U);
-  EXPECT_GE(kv_num(lines[4], "tx_ok"), tx_before);
-  EXPECT_LE(kv_num(lines[4], "tx_ok"), rig.can.counters().tx_ok);
-  EXPECT_EQ(kv(lines[4], "bus_off"), std::to_string(rig.can.counters().bus_off));
-  EXPECT_EQ(lines[5].rfind("stats nav ", 0), 0U);
-  EXPECT_EQ(kv(lines[5], "ranges_used"), std::to_string(rig.app.navigator().diagnostics().ranges_used));
-  EXPECT_EQ(lines[6].rfind("stats console ", 0), 0U);
+  EXPECT_EQ(lines[5].rfind("stats can ", 0), 0U);
+  EXPECT_GE(kv_num(lines[5], "tx_ok"), tx_before);
+  EXPECT_LE(kv_num(lines[5], "tx_ok"), rig.can.counters().tx_ok);
+  EXPECT_EQ(kv(lines[5], "bus_off"), std::to_string(rig.can.counters().bus_off));
+  EXPECT_EQ(lines[6].rfind("stats nav ", 0), 0U);
+  EXPECT_EQ(kv(lines[6], "ranges_used"), std::to_string(rig.app.navigator().diagnostics().ranges_used));
+  EXPECT_EQ(lines[7].rfind("stats console ", 0), 0U);
 }
 
 TEST(ConsoleCommands, StatsShowsCanBusOffFromTheBoard) {
   ConsoleRig rig(sim_recording());
   rig.can.set_state(hal::CanBusState::kBusOff);
   const auto lines = reply_lines(rig.command("stats"));
-  ASSERT_EQ(lines.size(), 7U);
-  EXPECT_EQ(kv(lines[4], "state"), "bus_off");
-  EXPECT_EQ(kv(lines[4], "bus_off"), "1");
+  ASSERT_EQ(lines.size(), 8U);
+  EXPECT_EQ(kv(lines[5], "state"), "bus_off");
+  EXPECT_EQ(kv(lines[5], "bus_off"), "1");
 }
 
 TEST(ConsoleCommands, AnchorsListsEverySiteAnchorWithItsCounters) {

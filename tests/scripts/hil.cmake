@@ -29,7 +29,7 @@ if(TARGET uwbnav)
   # epoch, the parked start with two of four anchors blocked (ranges-only, aligning) included.
   set_tests_properties(hil_spawned_firmware_over_can_link_realtime PROPERTIES
     FIXTURES_REQUIRED hil_rec LABELS realtime RUN_SERIAL TRUE TIMEOUT 180
-    PASS_REGULAR_EXPRESSION "hil: +[0-9.]+ of [0-9.]+ s played.*CHECK passed: latency max \\[ms\\].*CHECK passed: latency p99 \\[ms\\].*CHECKS PASSED"
+    PASS_REGULAR_EXPRESSION "hil: +[0-9.]+ of [0-9.]+ s played.*latency histogram +solutions per bin.*firmware cycles +deadline to end of work.*CHECK passed: latency max \\[ms\\].*CHECK passed: latency p99 \\[ms\\].*CHECKS PASSED"
     FAIL_REGULAR_EXPRESSION "CHECK FAILED")
 
   # The firmware process replaying a recording in real time stops after --duration and prints its loop stats.
@@ -38,7 +38,7 @@ if(TARGET uwbnav)
       --can-log ${hil_dir}/firmware_replay_can.log)
   set_tests_properties(hil_firmware_process_replays_recording_for_duration PROPERTIES
     FIXTURES_REQUIRED hil_rec LABELS realtime TIMEOUT 60
-    PASS_REGULAR_EXPRESSION "stopped \\(duration\\).*loop +cycles [1-9][0-9]+ .*CAN tx +sent [1-9][0-9]+ ")
+    PASS_REGULAR_EXPRESSION "stopped \\(duration\\).*loop +cycles [1-9][0-9]+ .*latency +deadline to end of work: max [0-9]+ us; cycles per bin: <=50:[0-9]+ .* >50000:[0-9]+.*rt +(mlockall|off).*CAN log +written [1-9][0-9]+ +overflow 0 .*CAN tx +sent [1-9][0-9]+ ")
 
   # Without AF_CAN (this build machine) or without the interface, --can-if fails with a clear reason.
   add_test(NAME hil_firmware_can_if_fails_clearly_without_interface

@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <string>
 #include <vector>
@@ -55,6 +56,24 @@ Status connect_to_child(const std::string& path, int pid, int& fd, std::string* 
   }
   if (error) *error = "the firmware did not open " + path + " within 15 s";
   return Status::kEmpty;
+}
+
+// The cycle-latency histogram line of the spawned firmware's exit summary
+// ("  latency  deadline to end of work: ..."), without its label; "" when absent.
+std::string firmware_latency_line(const std::string& log_path) {
+  std::FILE* f = std::fopen(log_path.c_str(), "r");
+  if (f == nullptr) return "";
+  char line[512];
+  std::string found;
+  const char* const kLabel = "  latency  ";
+  while (std::fgets(line, sizeof line, f) != nullptr) {
+    if (std::strncmp(line, kLabel, std::strlen(kLabel)) == 0) {
+      found = line + std::strlen(kLabel);
+      while (!found.empty() && (found.back() == '\n' || found.back() == '\r')) found.pop_back();
+    }
+  }
+  std::fclose(f);
+  return found;
 }
 
 }  // namespace
@@ -191,6 +210,7 @@ int cmd_hil(int argc, char** argv) {
 
   hil::HilReport report = hil::build_report(rec, run, !args.has("--no-lockstep"));
   report.link = socketcan ? "can:" + args.get("--can-if") : "unix:" + link;
+  if (child > 0 && !out.empty()) report.firmware_latency = firmware_latency_line(out + "/firmware.log");
   hil::print_report(stdout, report);
   if (child > 0) std::printf("hil: firmware stopped with SIGTERM, exit code %d\n", child_code);
   if (!out.empty()) {

@@ -230,6 +230,10 @@ HilReport build_report(const dataset::Recording& rec, const RigRun& run, bool lo
   if (run.monitor) {
     const OutputMonitor& m = *run.monitor;
     r.latency_ms = series_stats(scaled(m.latencies_us(), 1e-3));
+    r.latency_hist.assign(kNumLatencyBins, 0);
+    for (double us : m.latencies_us()) {
+      ++r.latency_hist[latency_bin(us > 4.0e9 ? 4000000000U : static_cast<uint32_t>(std::max(0.0, us)))];
+    }
     const std::vector<double> periods_ms = scaled(m.periods_us(), 1e-3);
     r.period_ms = series_stats(periods_ms);
     for (double p : periods_ms) r.period_max_dev_ms = std::max(r.period_max_dev_ms, std::fabs(p - 10.0));
@@ -280,6 +284,19 @@ std::vector<std::pair<std::string, std::string>> report_rows(const HilReport& r)
   std::snprintf(b, sizeof b, "n %zu  mean %.2f  p50 %.2f  p95 %.2f  p99 %.2f  max %.2f ms", r.latency_ms.n,
                 r.latency_ms.mean, r.latency_ms.p50, r.latency_ms.p95, r.latency_ms.p99, r.latency_ms.max);
   add("latency e2e");
+  if (!r.latency_hist.empty()) {
+    std::string h;
+    for (uint32_t i = 0; i < kNumLatencyBins && i < r.latency_hist.size(); ++i) {
+      char bin[48];
+      if (i + 1 < kNumLatencyBins) {
+        std::snprintf(bin, sizeof bin, "%s<=%u:%u", i ? " " : "", kLatencyBinUpperUs[i], r.latency_hist[i]);
+      } else {
+        std::snprintf(bin, sizeof bin, " >%u:%u", kLatencyBinUpperUs[kNumLatencyBins - 2], r.latency_hist[i]);
+      }
+      h += bin;
+    }
+    rows.emplace_back("latency histogram", "solutions per bin [us] " + h);
+  }
   std::snprintf(b, sizeof b, "mean %.3f  std %.3f  min %.2f  max %.2f ms, max |dev from 10 ms| %.2f ms",
                 r.period_ms.mean, r.period_ms.std, r.period_ms.min, r.period_ms.max, r.period_max_dev_ms);
   add("PosXY period");
@@ -299,6 +316,7 @@ std::vector<std::pair<std::string, std::string>> report_rows(const HilReport& r)
     std::snprintf(b, sizeof b, "no UWBNAV_Diag received");
   }
   add("firmware");
+  if (!r.firmware_latency.empty()) rows.emplace_back("firmware cycles", r.firmware_latency);
   std::snprintf(b, sizeof b, "RMSE %.3f m  MAX %.3f m  STD %.3f m  (%zu of %zu epochs)", r.hil.rmse_h_m,
                 r.hil.max_h_m, r.hil.std_h_m, r.hil.epochs, r.hil.epochs_total);
   add("position (HIL)");

@@ -71,6 +71,7 @@ struct HilReport {
   uint64_t send_late_max_us = 0;
   uint64_t frames_received = 0;
   SeriesStats latency_ms;           // end-to-end latency (docs/hil.md)
+  std::vector<uint32_t> latency_hist;  // end-to-end latency per bin of the firmware's cycle histogram (kLatencyBinUpperUs)
   SeriesStats period_ms;            // PosXY inter-arrival
   double period_max_dev_ms = 0.0;   // max |inter-arrival - 10 ms|
   std::vector<MessageCheck> messages;
@@ -87,6 +88,7 @@ struct HilReport {
   eval::AccuracyStats lockstep;     // same recording, lockstep replay, vs truth
   bool interrupted = false;
   bool link_closed = false;
+  std::string firmware_latency;     // the spawned firmware's own cycle-latency histogram (its exit summary)
 };
 
 // Pass/fail bounds of `uwbnav hil --max-*` (a negative bound: not checked).
