@@ -48,6 +48,12 @@ struct SourceStats {
   }
 };
 
+// Boards whose loop driver reports no cycle timing (the lockstep MPS2 image) build
+// without the histogram (flash).
+#ifndef UWBNAV_LOOP_HISTOGRAM
+#define UWBNAV_LOOP_HISTOGRAM 1
+#endif
+
 // Cycle-latency histogram (as rt-tests' cyclictest, in coarse bins): the time
 // from a cycle's deadline to the end of its work [us] — the wake-up latency
 // plus the work. Bin i counts latencies <= kLatencyBinUpperUs[i]; the last bin
@@ -68,8 +74,10 @@ struct LoopStats {
   uint32_t cycle_max_us = 0;
   uint64_t cycle_sum_us = 0;      // for the average
   uint32_t jitter_max_us = 0;     // max |actual start - deadline| [us] (real-time driver)
+#if UWBNAV_LOOP_HISTOGRAM
   uint32_t latency_max_us = 0;    // max (end of work - deadline) [us]
   uint32_t latency_hist[kNumLatencyBins] = {};  // cycles per latency bin (kLatencyBinUpperUs)
+#endif
   uint32_t avg_us() const { return cycles ? static_cast<uint32_t>(cycle_sum_us / cycles) : 0; }
 };
 

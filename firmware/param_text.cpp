@@ -1,67 +1,66 @@
-// Parameter assignments from text: strict decimal parse, table lookup, bounds and
+// Parameter values from text: strict decimal parse, table lookup, bounds and
 // kind checks, with the one wording shared by the console and the CLI.
 #include "firmware/param_text.hpp"
 
+#include <cstdarg>
 #include <cstdio>
-#include <cstring>
 
 #include "firmware/text_format.hpp"
 
 namespace uwbnav {
+namespace {
 
 constexpr int kParamDigits = 6;  // significant digits of values in the texts ("%g", as the console)
 
+// Names by ParamKind value (an array: smaller than param_kind_name's switch on the M4F).
+constexpr const char* kKindNames[] = {"real", "integer", "bool", "enum"};
+
+// printf into msg through vsnprintf (which the console links anyway).
+__attribute__((format(printf, 3, 4))) void say(char* msg, size_t cap, const char* fmt, ...) {
+  va_list ap;
+  va_start(ap, fmt);
+  (void)std::vsnprintf(msg, cap, fmt, ap);
+  va_end(ap);
+}
+
+}  // namespace
+
 Status check_param_value(const char* name, float value, const ParamDef** def, char* msg, size_t cap) {
-  if (cap > 0) msg[0] = '\0';
   const ParamDef* d = Params::find(name);
   if (d == nullptr) {
-    std::snprintf(msg, cap, "unknown parameter '%s' (see param list)", name);
+    say(msg, cap, "unknown parameter '%s' (see param list)", name);
     return Status::kNotFound;
   }
-  char v_text[kGeneralTextMax];
-  (void)format_general(v_text, sizeof v_text, value, kParamDigits);
-  if (!(value >= d->min && value <= d->max)) {
-    char lo[kGeneralTextMax];
-    char hi[kGeneralTextMax];
-    (void)format_general(lo, sizeof lo, d->min, kParamDigits);
-    (void)format_general(hi, sizeof hi, d->max, kParamDigits);
-    std::snprintf(msg, cap, "%s=%s out of range [%s, %s]", d->name, v_text, lo, hi);
+  const bool in_range = value >= d->min && value <= d->max;
+  if (in_range && (d->kind == ParamKind::kReal || detail::is_whole(value))) {
+    *def = d;
+    return Status::kOk;
+  }
+  char v[kGeneralTextMax];
+  char lo[kGeneralTextMax];
+  char hi[kGeneralTextMax];
+  (void)format_general(v, sizeof v, value, kParamDigits);
+  (void)format_general(lo, sizeof lo, d->min, kParamDigits);
+  (void)format_general(hi, sizeof hi, d->max, kParamDigits);
+  if (!in_range) {
+    say(msg, cap, "%s=%s out of range [%s, %s]", d->name, v, lo, hi);
     return Status::kOutOfRange;
   }
-  if (d->kind != ParamKind::kReal && !detail::is_whole(value)) {
-    std::snprintf(msg, cap, "%s=%s is not a whole number (%s parameter)", d->name, v_text,
-                  param_kind_name(d->kind));
-    return Status::kInvalidArgument;
-  }
-  *def = d;
-  return Status::kOk;
+  say(msg, cap, "%s=%s is not a whole number (%s parameter)", d->name, v,
+      kKindNames[static_cast<size_t>(d->kind) & 3U]);
+  return Status::kInvalidArgument;
 }
 
 Status parse_param_value(const char* name, const char* value_text, const ParamDef** def, float* value, char* msg,
                          size_t cap) {
-  if (cap > 0) msg[0] = '\0';
-  const ParamDef* d = Params::find(name);
   const Result<float> parsed = parse_decimal_float(value_text);
-  if (d != nullptr && !parsed.ok()) {
-    std::snprintf(msg, cap, "%s=%s is not a finite number", d->name, value_text);
+  if (!parsed.ok() && Params::find(name) != nullptr) {
+    say(msg, cap, "%s=%s is not a finite number", name, value_text);
     return Status::kInvalidArgument;
   }
   const Status s = check_param_value(name, parsed.ok() ? parsed.value() : 0.0F, def, msg, cap);
   if (ok(s)) *value = parsed.value();
   return s;
-}
-
-Status parse_param_assignment(const char* text, const ParamDef** def, float* value, char* msg, size_t cap) {
-  const char* eq = std::strchr(text, '=');
-  char name[64];
-  const size_t name_len = eq == nullptr ? 0 : static_cast<size_t>(eq - text);
-  if (eq == nullptr || name_len == 0 || name_len >= sizeof name) {
-    std::snprintf(msg, cap, "'%s' is not NAME=VALUE", text);
-    return Status::kInvalidArgument;
-  }
-  std::memcpy(name, text, name_len);
-  name[name_len] = '\0';
-  return parse_param_value(name, eq + 1, def, value, msg, cap);
 }
 
 }  // namespace uwbnav

@@ -1,4 +1,5 @@
-// Parameter assignments from text (CLI --param NAME=VALUE, console `param set NAME VALUE`):
+// Parameter values from text (console `param set NAME VALUE`, CLI --param NAME=VALUE
+// through tools/cli/args.hpp):
 // one parser and one wording for every refusal, so every entry point names the
 // parameter and the reason the same way.
 #pragma once
@@ -23,10 +24,5 @@ constexpr size_t kParamErrorMax = 128;  // longest refusal text, terminator incl
 
 // The checks of parse_param_value on a number (value NaN: out of range).
 [[nodiscard]] Status check_param_value(const char* name, float value, const ParamDef** def, char* msg, size_t cap);
-
-// The same for "NAME=VALUE" (command-line form); a text without '=' or without a
-// name gives "'TEXT' is not NAME=VALUE".
-[[nodiscard]] Status parse_param_assignment(const char* text, const ParamDef** def, float* value, char* msg,
-                                            size_t cap);
 
 }  // namespace uwbnav

@@ -173,9 +173,7 @@ void Console::take_snapshot(Job job) {
   if (job == Job::kStats) {
     snap_.app = app_.stats();
     snap_.nav = app_.nav_counters();
-    snap_.can = app_.can_counters();
-    snap_.can_tx = app_.can_tx_stats();
-    snap_.can_rx = app_.can_rx_stats();
+    snap_.can = app_.board().can.counters();
     snap_.can_state = app_.board().can.state();
   } else if (job == Job::kAnchors) {
     const size_t n = nav.num_anchors();

@@ -13,8 +13,6 @@
 #include "estimator/navigator.hpp"
 #include "estimator/types.hpp"
 #include "firmware/app_stats.hpp"
-#include "firmware/can/publisher.hpp"
-#include "firmware/can/sensor_decoder.hpp"
 #include "firmware/console/byte_ring.hpp"
 #include "firmware/console/line_editor.hpp"
 #include "firmware/console/log.hpp"
@@ -97,8 +95,6 @@ class Console final : public LogSink {
     AppStats app;
     NavDiagnostics nav;
     hal::CanCounters can;
-    can::CanTxStats can_tx;
-    can::CanSensorStats can_rx;
     hal::CanBusState can_state = hal::CanBusState::kDown;
     uint64_t t_us = 0;
     size_t num_anchors = 0;
@@ -171,6 +167,7 @@ class Console final : public LogSink {
   bool step_cal(size_t step);
   void add_param(size_t index, bool with_doc);
   bool param_listed(size_t index) const;
+  size_t next_listed(size_t from) const;  // first listed index >= from (kNumParams: none)
   void add_param_change(const ParamDef& p, float old);
   void add_pos_fields();
   void add_reset_fields(const NavDiagnostics& dg);
@@ -200,9 +197,10 @@ class Console final : public LogSink {
   uint64_t pending_drop_bytes_ = 0;       // dropped since the last marker
 
   Snapshot snap_;
-  char list_glob_[48] = {};               // `param list GLOB` ("" lists all)
-  bool list_changed_only_ = false;        // `param list -c`: only values differing from the default
-  size_t list_cursor_ = 0;                // next parameter index the list job looks at
+  // `param list [-c] [GLOB]`, set by the command before the list job runs.
+  char list_glob_[48];                    // GLOB ("" lists all)
+  bool list_changed_only_;                // -c: only values differing from the default
+  size_t list_cursor_;                    // next parameter index the list job looks at
   Job job_ = Job::kNone;
   size_t job_step_ = 0;
   bool job_verbose_ = false;

@@ -6,9 +6,9 @@
 
 #include "estimator/nlos/svm_model.hpp"
 #include "estimator/params.hpp"
-#include "firmware/param_text.hpp"
 #include "firmware/app.hpp"
 #include "firmware/console/console.hpp"
+#include "firmware/param_text.hpp"
 #include "firmware/text_format.hpp"
 
 #ifndef UWBNAV_VERSION
@@ -79,6 +79,8 @@ static_assert(sizeof kStreamNames / sizeof kStreamNames[0] == static_cast<size_t
 
 }  // namespace
 
+constexpr const char* kParamUsage = "param list [-c] [GLOB]|get NAME|set NAME VALUE|save|load|reset [NAME]";
+
 const Console::Command Console::kCommands[] = {
     {"help", "help", "this list", &Console::cmd_help},
     {"version", "version", "firmware version, git hash, parameter table and NLOS model checksums",
@@ -89,7 +91,7 @@ const Console::Command Console::kCommands[] = {
     {"anchors", "anchors", "per anchor: last range, innovation, NLOS probability, LOS/NLOS counts, state",
      &Console::cmd_anchors},
     {"ekf", "ekf [-v]", "state vector and covariance diagonal (-v: full 15x15 covariance)", &Console::cmd_ekf},
-    {"param", "param list [-c] [GLOB]|get NAME|set NAME VALUE|save|load|reset [NAME]",
+    {"param", kParamUsage,
      "parameters (bounds-checked, applied live; save/load: parameter store)", &Console::cmd_param},
     {"log", "log level [error|warn|info|debug]", "show or set the log level (param console.log_level)",
      &Console::cmd_log},
@@ -213,11 +215,13 @@ bool Console::step_stats(size_t step) {
     }
     case 1: {
       // Cycle latency (deadline to end of work) histogram: counts per bin "le<upper_us>", then "gt<last>".
-      const LoopStats& l = s.loop;
       begin("stats latency");
+#if UWBNAV_LOOP_HISTOGRAM
+      const LoopStats& l = s.loop;
       add(" max_us=%lu", ul(l.latency_max_us));
       for (uint32_t i = 0; i + 1 < kNumLatencyBins; ++i) add(" le%lu=%lu", ul(kLatencyBinUpperUs[i]), ul(l.latency_hist[i]));
       add(" gt%lu=%lu", ul(kLatencyBinUpperUs[kNumLatencyBins - 2]), ul(l.latency_hist[kNumLatencyBins - 1]));
+#endif
       break;
     }
     case 2:
@@ -238,9 +242,6 @@ bool Console::step_stats(size_t step) {
       add(" state=%s tx_ok=%lu tx_dropped=%lu bus_off=%lu rx_ok=%lu rx_overflow=%lu error_frames=%lu",
           can_state_name(snap_.can_state), ul(c.tx_ok), ul(c.tx_dropped), ul(c.bus_off), ul(c.rx_ok),
           ul(c.rx_overflow), ul(c.error_frames));
-      add(" pub_sent=%lu pub_dropped=%lu pub_failed=%lu hil_frames=%lu hil_crc=%lu hil_lost=%lu",
-          ul(snap_.can_tx.sent), ul(snap_.can_tx.dropped), ul(snap_.can_tx.failed), ul(snap_.can_rx.frames),
-          ul(snap_.can_rx.crc_errors), ul(snap_.can_rx.frames_lost));
       break;
     }
     case 6: {
@@ -412,23 +413,24 @@ bool Console::param_listed(size_t index) const {
   return list_glob_[0] == '\0' || glob_match(list_glob_, p.name);
 }
 
+size_t Console::next_listed(size_t from) const {
+  while (from < kNumParams && !param_listed(from)) ++from;
+  return from;
+}
+
 // `param list [-c] [GLOB]`: a count line, then one line per listed parameter.
 bool Console::step_param_list(size_t step) {
+  begin("param");
   if (step == 0) {
     size_t n = 0;
-    for (size_t i = 0; i < kNumParams; ++i) n += param_listed(i) ? 1U : 0U;
-    begin("param");
+    for (size_t i = next_listed(0); i < kNumParams; i = next_listed(i + 1)) ++n;
     add(" count=%lu", static_cast<unsigned long>(n));
-    reply_end();
-    list_cursor_ = 0;
-    while (list_cursor_ < kNumParams && !param_listed(list_cursor_)) ++list_cursor_;
-    return list_cursor_ < kNumParams;
+    list_cursor_ = next_listed(0);
+  } else {
+    add_param(list_cursor_, false);
+    list_cursor_ = next_listed(list_cursor_ + 1);
   }
-  begin("param");
-  add_param(list_cursor_, false);
   reply_end();
-  ++list_cursor_;
-  while (list_cursor_ < kNumParams && !param_listed(list_cursor_)) ++list_cursor_;
   return list_cursor_ < kNumParams;
 }
 
@@ -443,7 +445,7 @@ void Console::cmd_param(size_t argc, char** argv) {
       } else if (glob[0] == '\0' && argv[i][0] != '-' && std::strlen(argv[i]) < sizeof list_glob_) {
         glob = argv[i];
       } else {
-        error("param: usage: param list [-c] [GLOB] (e.g. param list gate.*, param list -c)");
+        error("param: usage: %s", kParamUsage);
         return;
       }
     }
@@ -516,7 +518,7 @@ void Console::cmd_param(size_t argc, char** argv) {
     add_param_change(*p, old);
     return;
   }
-  error("param: usage: param list [-c] [GLOB]|get NAME|set NAME VALUE|save|load|reset [NAME]");
+  error("param: usage: %s", kParamUsage);
 }
 
 void Console::cmd_log(size_t argc, char** argv) {

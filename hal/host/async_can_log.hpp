@@ -44,6 +44,7 @@ class AsyncCanLog final : public CanBus {
   [[nodiscard]] Status receive(CanFrame& out) override;
   CanBusState state() const override { return inner_.state(); }
   const CanCounters& counters() const override { return inner_.counters(); }
+  void reset_counters() override { inner_.reset_counters(); }
 
   AsyncLogCounters log_counters() const;
   // Writes everything queued now, in the calling thread (tests; the writer does this).

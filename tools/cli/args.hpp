@@ -73,6 +73,18 @@ class Args {
   std::string error_;
 };
 
+// "NAME=VALUE" (command-line form) through parse_param_value; a text without
+// '=' or without a name gives "'TEXT' is not NAME=VALUE".
+inline Status parse_param_assignment(const std::string& text, const ParamDef** def, float* value, char* msg,
+                                     size_t cap) {
+  const size_t eq = text.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    std::snprintf(msg, cap, "'%s' is not NAME=VALUE", text.c_str());
+    return Status::kInvalidArgument;
+  }
+  return parse_param_value(text.substr(0, eq).c_str(), text.c_str() + eq + 1, def, value, msg, cap);
+}
+
 // Parses every --param NAME=VALUE of `args` (after the table: bounds, whole-number
 // kinds). On the first bad one prints "PROG: param: <reason>" (the console's
 // wording, firmware/param_text.hpp) and returns false.
@@ -81,7 +93,7 @@ inline bool parse_param_options(const Args& args, const char* prog, std::vector<
     const ParamDef* def = nullptr;
     float value = 0.0F;
     char why[kParamErrorMax];
-    if (!ok(parse_param_assignment(text.c_str(), &def, &value, why, sizeof why))) {
+    if (!ok(parse_param_assignment(text, &def, &value, why, sizeof why))) {
       std::fprintf(stderr, "%s: param: %s\n", prog, why);
       return false;
     }
