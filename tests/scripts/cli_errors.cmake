@@ -69,6 +69,11 @@ maneuver = turn 90 3
     "-DARGS=replay|${cli_dir}/short_imu|--out|${cli_dir}/o_short" -DRC=3
     "-DERR=imu.csv: ends at t=[0-9.]+ s, [0-9.]+ s before uwb.csv .*input stream ended early")
 
+  cli_check(cli_firmware_truncated_imu_warns_and_exits_3
+    "-DPREPARE=copy|${cli_dir}/rec|${cli_dir}/short_imu_fw" "-DEDIT=truncate_half|imu.csv"
+    "-DARGS=firmware|--recording|${cli_dir}/short_imu_fw|--console|none|--duration|0.5" -DRC=3
+    "-DERR=warning: imu.csv: ends at t=.*input stream ended early")
+
   # Parameters: which one and why, the same words as the console's `param set`.
   cli_check(cli_replay_param_not_a_number
     "-DARGS=replay|${cli_dir}/rec|--out|${cli_dir}/o_p1|--param|uwb.sigma=abc" -DRC=2

@@ -253,6 +253,8 @@ int cmd_firmware(int argc, char** argv) {
       "  sensors: --recording DIR replays DIR in real time; without it a HIL rig sends them over CAN\n"
       "  (can.hil_rx_enable = 1) and --site DIR (a recording) gives the anchors and tags\n"
       "  --cal FILE: site range calibration loaded at start (uwbnav calibrate, docs/commissioning.md)\n"
+      "  exit status: 0 done, 1 input or start-up failure, 2 usage or parameter error,\n"
+      "  3 the recording's IMU or UWB stream ended early (replayed anyway)\n"
       "  real time (docs/realtime.md): memory locked and the loop at SCHED_FIFO --rt-priority (default 80)\n"
       "  when permitted, with a note when not; --no-rt runs without either\n";
   double duration_s = 0.0;
@@ -291,6 +293,9 @@ int cmd_firmware(int argc, char** argv) {
     std::fprintf(stderr, "uwbnav firmware: cannot read %s: %s\n", site_dir.c_str(), read_report.error.c_str());
     return 1;
   }
+  // A recording whose streams end early is replayed, but the run says so and exits 3.
+  const std::vector<std::string> ended_early = replay ? dataset::streams_ended_early(rec) : std::vector<std::string>{};
+  for (const auto& line : ended_early) std::fprintf(stderr, "uwbnav firmware: warning: %s\n", line.c_str());
   if (!replay) {  // the site is all a HIL board takes from the recording
     rec.imu.clear();
     rec.uwb.clear();
@@ -453,7 +458,8 @@ int cmd_firmware(int argc, char** argv) {
   summary.wall_s = static_cast<double>(clock_us(CLOCK_MONOTONIC) - t_start_mono_us) * 1e-6;
   if (console == "stdio") std::printf("\n");  // end the console's prompt line
   print_summary(summary);
-  return 0;
+  for (const auto& line : ended_early) std::fprintf(stderr, "uwbnav firmware: %s\n", line.c_str());
+  return ended_early.empty() ? 0 : 3;
 }
 
 }  // namespace uwbnav::cli
