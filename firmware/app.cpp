@@ -2,6 +2,8 @@
 #include "firmware/app.hpp"
 
 #include <cmath>
+#include <cstddef>
+#include <cstring>
 
 #include "firmware/param_blob.hpp"
 
@@ -30,6 +32,7 @@ bool site_calibration_valid(const SiteConfig& site) {
 App::App(hal::Board& board) : board_(board) {}
 
 Status App::init() {
+  for (uint32_t& b : nav_base_) b = 0;  // the navigator's counters restart with configure()
   if (!site_calibration_valid(board_.site)) {
     initialised_ = false;
     return Status::kInvalidArgument;
@@ -84,13 +87,40 @@ void App::reset_filter() {
   validator_.reset_history();
 }
 
-void App::reset_stats() { stats_ = AppStats{}; }
+// The counters of NavDiagnostics (imu_samples .. operator_resets) are its leading
+// uint32_t fields: `reset stats` keeps their values as an array and subtracts
+// it in one loop (flash on the M4F).
+static_assert(offsetof(NavDiagnostics, imu_samples) == 0 &&
+                  offsetof(NavDiagnostics, operator_resets) == (App::kNavCounters - 1) * sizeof(uint32_t),
+              "NavDiagnostics counters are no longer the leading uint32_t fields");
+
+void App::reset_stats() {
+  stats_ = AppStats{};
+  can_tx_.reset_stats();
+  can_decoder_.reset_stats();
+  std::memcpy(nav_base_, &nav_.diagnostics(), sizeof nav_base_);
+  board_.can.reset_counters();
+}
+
+NavDiagnostics App::nav_counters() const {
+  NavDiagnostics d = nav_.diagnostics();
+  uint32_t c[kNavCounters];
+  std::memcpy(c, &d, sizeof c);
+  for (size_t i = 0; i < kNavCounters; ++i) c[i] -= nav_base_[i];
+  std::memcpy(static_cast<void*>(&d), c, sizeof c);  // the leading counters only (static_assert above)
+  return d;
+}
 
 void App::record_cycle_timing(uint32_t work_us, uint32_t jitter_us, bool overrun) {
   LoopStats& l = stats_.loop;
   if (l.cycles == 0 || work_us < l.cycle_min_us) l.cycle_min_us = work_us;
   if (work_us > l.cycle_max_us) l.cycle_max_us = work_us;
   if (jitter_us > l.jitter_max_us) l.jitter_max_us = jitter_us;
+#if UWBNAV_LOOP_HISTOGRAM
+  const uint32_t latency_us = jitter_us + work_us;
+  if (latency_us > l.latency_max_us) l.latency_max_us = latency_us;
+  ++l.latency_hist[latency_bin(latency_us)];
+#endif
   l.cycle_sum_us += work_us;
   ++l.cycles;
   if (overrun) ++l.overruns;

@@ -72,7 +72,14 @@ class App {
   [[nodiscard]] Status load_params();
 
   void reset_filter();
+  // Zeroes every counter the console shows: input validation and loop timing,
+  // CAN bus driver, publisher and HIL decoder, and - as offsets from this moment,
+  // since the estimator counts monotonically - the navigator's counters
+  // (nav_counters()). CAN diagnostics frames keep carrying the monotonic counts.
   void reset_stats();
+  // The navigator's diagnostics with its counters taken since the last reset_stats().
+  NavDiagnostics nav_counters() const;
+  static constexpr size_t kNavCounters = 10;  // leading uint32_t counters of NavDiagnostics
 
   const AppStats& stats() const { return stats_; }
   const Navigator& navigator() const { return nav_; }
@@ -103,6 +110,7 @@ class App {
   can::CanSensorSample can_pending_[kMaxCanPending];  // HIL samples due in a later cycle
   size_t can_pending_count_ = 0;
   AppStats stats_;
+  uint32_t nav_base_[kNavCounters];  // navigator counters at the last reset_stats() (zeroed by init())
   AppObserver* observer_ = nullptr;
   NavOutput last_output_;
   uint64_t last_tick_us_ = 0;

@@ -48,6 +48,25 @@ struct SourceStats {
   }
 };
 
+// Boards whose loop driver reports no cycle timing (the lockstep MPS2 image) build
+// without the histogram (flash).
+#ifndef UWBNAV_LOOP_HISTOGRAM
+#define UWBNAV_LOOP_HISTOGRAM 1
+#endif
+
+// Cycle-latency histogram (as rt-tests' cyclictest, in coarse bins): the time
+// from a cycle's deadline to the end of its work [us] — the wake-up latency
+// plus the work. Bin i counts latencies <= kLatencyBinUpperUs[i]; the last bin
+// everything above. A latency above the period is an overrun.
+constexpr uint32_t kLatencyBinUpperUs[] = {50, 100, 200, 500, 1000, 2000, 5000, 10000, 20000, 50000};
+constexpr uint32_t kNumLatencyBins = sizeof kLatencyBinUpperUs / sizeof kLatencyBinUpperUs[0] + 1;
+
+constexpr uint32_t latency_bin(uint32_t latency_us) {
+  uint32_t i = 0;
+  while (i + 1 < kNumLatencyBins && latency_us > kLatencyBinUpperUs[i]) ++i;
+  return i;
+}
+
 struct LoopStats {
   uint64_t cycles = 0;
   uint64_t overruns = 0;          // cycles whose work exceeded the period
@@ -55,6 +74,10 @@ struct LoopStats {
   uint32_t cycle_max_us = 0;
   uint64_t cycle_sum_us = 0;      // for the average
   uint32_t jitter_max_us = 0;     // max |actual start - deadline| [us] (real-time driver)
+#if UWBNAV_LOOP_HISTOGRAM
+  uint32_t latency_max_us = 0;    // max (end of work - deadline) [us]
+  uint32_t latency_hist[kNumLatencyBins] = {};  // cycles per latency bin (kLatencyBinUpperUs)
+#endif
   uint32_t avg_us() const { return cycles ? static_cast<uint32_t>(cycle_sum_us / cycles) : 0; }
 };
 

@@ -68,6 +68,8 @@ class CanBus {
   [[nodiscard]] virtual Status receive(CanFrame& out) = 0;
   virtual CanBusState state() const = 0;
   virtual const CanCounters& counters() const = 0;
+  // Zeroes the counters (console `reset stats`); the bus state is untouched.
+  virtual void reset_counters() = 0;
 };
 
 // Byte stream to a person or a script (UART on target, stdio/pty on host).

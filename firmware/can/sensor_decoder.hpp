@@ -72,6 +72,7 @@ class CanSensorDecoder {
 
   const CanSensorStats& stats() const { return stats_; }
   void reset();
+  void reset_stats() { stats_ = CanSensorStats{}; }  // counters only; reception state kept
 
  private:
   static constexpr size_t kNumInputs = 5;

@@ -172,7 +172,7 @@ void Console::take_snapshot(Job job) {
   const Navigator& nav = app_.navigator();
   if (job == Job::kStats) {
     snap_.app = app_.stats();
-    snap_.nav = nav.diagnostics();
+    snap_.nav = app_.nav_counters();
     snap_.can = app_.board().can.counters();
     snap_.can_state = app_.board().can.state();
   } else if (job == Job::kAnchors) {

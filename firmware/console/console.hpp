@@ -73,6 +73,8 @@ class Console final : public LogSink {
   void reset_stats() { stats_ = ConsoleStats{}; }
   // Bytes queued for the port.
   size_t tx_pending() const { return tx_.size(); }
+  // Input read but not yet handled, a multi-line reply in progress, or output queued.
+  bool busy() const { return rx_pos_ < rx_len_ || job_ != Job::kNone || !tx_.empty(); }
   uint32_t stream_rate_hz(StreamKind kind) const { return stream_rate_hz_[static_cast<size_t>(kind)]; }
 
   void log_line(LogLevel level, const char* text, size_t len) override;
@@ -164,8 +166,11 @@ class Console final : public LogSink {
   bool step_history(size_t step);
   bool step_cal(size_t step);
   void add_param(size_t index, bool with_doc);
+  bool param_listed(size_t index) const;
+  size_t next_listed(size_t from) const;  // first listed index >= from (kNumParams: none)
   void add_param_change(const ParamDef& p, float old);
   void add_pos_fields();
+  void add_reset_fields(const NavDiagnostics& dg);
   void add_anchor_fields(const AnchorStatus& a);
   void stream_anchor_lines();
 
@@ -192,6 +197,10 @@ class Console final : public LogSink {
   uint64_t pending_drop_bytes_ = 0;       // dropped since the last marker
 
   Snapshot snap_;
+  // `param list [-c] [GLOB]`, set by the command before the list job runs.
+  char list_glob_[48];                    // GLOB ("" lists all)
+  bool list_changed_only_;                // -c: only values differing from the default
+  size_t list_cursor_;                    // next parameter index the list job looks at
   Job job_ = Job::kNone;
   size_t job_step_ = 0;
   bool job_verbose_ = false;

@@ -8,6 +8,7 @@
 #include "estimator/params.hpp"
 #include "firmware/app.hpp"
 #include "firmware/console/console.hpp"
+#include "firmware/param_text.hpp"
 #include "firmware/text_format.hpp"
 
 #ifndef UWBNAV_VERSION
@@ -78,6 +79,8 @@ static_assert(sizeof kStreamNames / sizeof kStreamNames[0] == static_cast<size_t
 
 }  // namespace
 
+constexpr const char* kParamUsage = "param list [-c] [GLOB]|get NAME|set NAME VALUE|save|load|reset [NAME]";
+
 const Console::Command Console::kCommands[] = {
     {"help", "help", "this list", &Console::cmd_help},
     {"version", "version", "firmware version, git hash, parameter table and NLOS model checksums",
@@ -88,7 +91,7 @@ const Console::Command Console::kCommands[] = {
     {"anchors", "anchors", "per anchor: last range, innovation, NLOS probability, LOS/NLOS counts, state",
      &Console::cmd_anchors},
     {"ekf", "ekf [-v]", "state vector and covariance diagonal (-v: full 15x15 covariance)", &Console::cmd_ekf},
-    {"param", "param list|get NAME|set NAME VALUE|save|load|reset [NAME]",
+    {"param", kParamUsage,
      "parameters (bounds-checked, applied live; save/load: parameter store)", &Console::cmd_param},
     {"log", "log level [error|warn|info|debug]", "show or set the log level (param console.log_level)",
      &Console::cmd_log},
@@ -161,22 +164,33 @@ void Console::cmd_status(size_t argc, char**) {
     error("status: takes no arguments");
     return;
   }
-  const NavDiagnostics& dg = app_.navigator().diagnostics();
+  const NavDiagnostics dg = app_.nav_counters();
+  const NavDiagnostics& raw = app_.navigator().diagnostics();  // times are not counters
   const uint64_t now = app_.last_tick_us();
   begin("status");
   add_pos_fields();
-  if (dg.last_imu_t_us == 0 || dg.last_imu_t_us > now) {
+  if (raw.last_imu_t_us == 0 || raw.last_imu_t_us > now) {
     add(" imu_age_ms=none");
   } else {
-    add_u64(" imu_age_ms=", (now - dg.last_imu_t_us) / 1000U);
+    add_u64(" imu_age_ms=", (now - raw.last_imu_t_us) / 1000U);
   }
-  if (dg.last_range_used_t_us == 0 || dg.last_range_used_t_us > now) {
+  if (raw.last_range_used_t_us == 0 || raw.last_range_used_t_us > now) {
     add(" uwb_age_ms=none");
   } else {
-    add_u64(" uwb_age_ms=", (now - dg.last_range_used_t_us) / 1000U);
+    add_u64(" uwb_age_ms=", (now - raw.last_range_used_t_us) / 1000U);
   }
-  add(" used_total=%lu resets=%lu", ul(dg.ranges_used), ul(dg.resets));
+  add(" used_total=%lu", ul(dg.ranges_used));
+  add_reset_fields(dg);
   reply_end();
+}
+
+// Every kind of reset and recovery, since start or `reset stats`: hard resets
+// (non-finite or exploded state), operator resets (`reset filter`), and the
+// recovery ladder (inflations, re-anchors, re-alignments), integrity failures.
+void Console::add_reset_fields(const NavDiagnostics& dg) {
+  add(" resets=%lu operator_resets=%lu inflations=%lu reanchors=%lu reinits=%lu integrity_fails=%lu",
+      ul(dg.resets), ul(dg.operator_resets), ul(dg.inflations), ul(dg.reanchors), ul(dg.reinits),
+      ul(dg.integrity_fails));
 }
 
 void Console::cmd_stats(size_t argc, char**) {
@@ -199,19 +213,30 @@ bool Console::step_stats(size_t step) {
           ul(l.cycle_max_us), ul(l.jitter_max_us));
       break;
     }
-    case 1:
+    case 1: {
+      // Cycle latency (deadline to end of work) histogram: counts per bin "le<upper_us>", then "gt<last>".
+      begin("stats latency");
+#if UWBNAV_LOOP_HISTOGRAM
+      const LoopStats& l = s.loop;
+      add(" max_us=%lu", ul(l.latency_max_us));
+      for (uint32_t i = 0; i + 1 < kNumLatencyBins; ++i) add(" le%lu=%lu", ul(kLatencyBinUpperUs[i]), ul(l.latency_hist[i]));
+      add(" gt%lu=%lu", ul(kLatencyBinUpperUs[kNumLatencyBins - 2]), ul(l.latency_hist[kNumLatencyBins - 1]));
+#endif
+      break;
+    }
     case 2:
-    case 3: {
-      const SourceStats& src = step == 1 ? s.imu : (step == 2 ? s.uwb : s.can_rx);
+    case 3:
+    case 4: {
+      const SourceStats& src = step == 2 ? s.imu : (step == 3 ? s.uwb : s.can_rx);
       begin("stats src=");
-      add("%s received=%lu accepted=%lu io_errors=%lu", step == 1 ? "imu" : (step == 2 ? "uwb" : "can_rx"),
+      add("%s received=%lu accepted=%lu io_errors=%lu", step == 2 ? "imu" : (step == 3 ? "uwb" : "can_rx"),
           ul(src.received), ul(src.accepted), ul(src.io_errors));
       for (uint32_t r = 0; r < kNumRejectReasons; ++r) {
         add(" %s=%lu", reject_reason_name(static_cast<RejectReason>(r)), ul(src.rejected[r]));
       }
       break;
     }
-    case 4: {
+    case 5: {
       const hal::CanCounters& c = snap_.can;
       begin("stats can");
       add(" state=%s tx_ok=%lu tx_dropped=%lu bus_off=%lu rx_ok=%lu rx_overflow=%lu error_frames=%lu",
@@ -219,12 +244,12 @@ bool Console::step_stats(size_t step) {
           ul(c.rx_overflow), ul(c.error_frames));
       break;
     }
-    case 5: {
+    case 6: {
       const NavDiagnostics& dg = snap_.nav;
       begin("stats nav");
-      add(" imu_samples=%lu ranges_received=%lu ranges_used=%lu ranges_rejected=%lu resets=%lu reinits=%lu",
-          ul(dg.imu_samples), ul(dg.ranges_received), ul(dg.ranges_used), ul(dg.ranges_rejected), ul(dg.resets),
-          ul(dg.reinits));
+      add(" imu_samples=%lu ranges_received=%lu ranges_used=%lu ranges_rejected=%lu", ul(dg.imu_samples),
+          ul(dg.ranges_received), ul(dg.ranges_used), ul(dg.ranges_rejected));
+      add_reset_fields(dg);
       break;
     }
     default: {
@@ -356,22 +381,76 @@ void Console::add_param_change(const ParamDef& p, float old) {
   reply_end();
 }
 
-bool Console::step_param_list(size_t step) {
-  if (step == 0) {
-    begin("param");
-    add(" count=%lu", static_cast<unsigned long>(kNumParams));
-    reply_end();
-    return kNumParams > 0;
+namespace {
+
+// Shell-style glob: '*' any run of characters, '?' one character, others literal.
+bool glob_match(const char* pattern, const char* text) {
+  const char* star = nullptr;  // last '*' seen in the pattern
+  const char* resume = text;   // where the text resumes after that '*'
+  while (*text != '\0') {
+    if (*pattern == '*') {
+      star = pattern++;
+      resume = text;
+    } else if (*pattern == '?' || *pattern == *text) {
+      ++pattern;
+      ++text;
+    } else if (star != nullptr) {
+      pattern = star + 1;
+      text = ++resume;
+    } else {
+      return false;
+    }
   }
+  while (*pattern == '*') ++pattern;
+  return *pattern == '\0';
+}
+
+}  // namespace
+
+bool Console::param_listed(size_t index) const {
+  const ParamDef& p = kParamDefs[index];
+  if (list_changed_only_ && app_.params().get(p.index) == p.def) return false;
+  return list_glob_[0] == '\0' || glob_match(list_glob_, p.name);
+}
+
+size_t Console::next_listed(size_t from) const {
+  while (from < kNumParams && !param_listed(from)) ++from;
+  return from;
+}
+
+// `param list [-c] [GLOB]`: a count line, then one line per listed parameter.
+bool Console::step_param_list(size_t step) {
   begin("param");
-  add_param(step - 1, false);
+  if (step == 0) {
+    size_t n = 0;
+    for (size_t i = next_listed(0); i < kNumParams; i = next_listed(i + 1)) ++n;
+    add(" count=%lu", static_cast<unsigned long>(n));
+    list_cursor_ = next_listed(0);
+  } else {
+    add_param(list_cursor_, false);
+    list_cursor_ = next_listed(list_cursor_ + 1);
+  }
   reply_end();
-  return step < kNumParams;
+  return list_cursor_ < kNumParams;
 }
 
 void Console::cmd_param(size_t argc, char** argv) {
   const char* sub = argc >= 2 ? argv[1] : "";
-  if (argc == 2 && std::strcmp(sub, "list") == 0) {
+  if (argc >= 2 && argc <= 4 && std::strcmp(sub, "list") == 0) {
+    bool changed_only = false;
+    const char* glob = "";
+    for (size_t i = 2; i < argc; ++i) {
+      if (std::strcmp(argv[i], "-c") == 0 && !changed_only) {
+        changed_only = true;
+      } else if (glob[0] == '\0' && argv[i][0] != '-' && std::strlen(argv[i]) < sizeof list_glob_) {
+        glob = argv[i];
+      } else {
+        error("param: usage: %s", kParamUsage);
+        return;
+      }
+    }
+    list_changed_only_ = changed_only;
+    std::strcpy(list_glob_, glob);
     start_job(Job::kParamList, false);
     return;
   }
@@ -387,25 +466,11 @@ void Console::cmd_param(size_t argc, char** argv) {
     return;
   }
   if (argc == 4 && std::strcmp(sub, "set") == 0) {
-    const ParamDef* p = Params::find(argv[2]);
-    if (p == nullptr) {
-      error("param: unknown parameter '%s' (see param list)", argv[2]);
-      return;
-    }
-    const Result<float> parsed = parse_decimal_float(argv[3]);
-    if (!parsed.ok()) {
-      error("param: '%s' is not a finite number; %s unchanged", argv[3], p->name);
-      return;
-    }
-    const float v = parsed.value();
-    if (v < p->min || v > p->max) {
-      begin_error();
-      add("param: %s", p->name);
-      add_general("=", v);
-      add_general(" out of range [", p->min);
-      add_general(", ", p->max);
-      add("]; unchanged");
-      reply_end();
+    const ParamDef* p = nullptr;
+    float v = 0.0F;
+    char why[kParamErrorMax];
+    if (!ok(parse_param_value(argv[2], argv[3], &p, &v, why, sizeof why))) {
+      error("param: %s; unchanged", why);
       return;
     }
     const float old = app_.params().get(p->index);
@@ -453,7 +518,7 @@ void Console::cmd_param(size_t argc, char** argv) {
     add_param_change(*p, old);
     return;
   }
-  error("param: usage: param list|get NAME|set NAME VALUE|save|load|reset [NAME]");
+  error("param: usage: %s", kParamUsage);
 }
 
 void Console::cmd_log(size_t argc, char** argv) {

@@ -77,6 +77,7 @@ class CanLogTee : public CanBus {
   [[nodiscard]] Status receive(CanFrame& out) override;
   CanBusState state() const override { return inner_.state(); }
   const CanCounters& counters() const override { return inner_.counters(); }
+  void reset_counters() override { inner_.reset_counters(); }
   uint32_t log_errors() const { return log_errors_; }
 
  private:

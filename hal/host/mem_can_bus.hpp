@@ -57,6 +57,7 @@ class MemCanBus : public CanBus {
   [[nodiscard]] Status receive(CanFrame& out) override;
   CanBusState state() const override { return state_; }
   const CanCounters& counters() const override { return counters_; }
+  void reset_counters() override { counters_ = CanCounters{}; }
 
   // Pops the oldest frame this endpoint put on the wire. kEmpty when none.
   [[nodiscard]] Status receive_sent(CanFrame& out);

@@ -105,6 +105,7 @@ class SocketCanBus : public CanBus {
   [[nodiscard]] Status receive(CanFrame& out) override;
   CanBusState state() const override { return state_; }
   const CanCounters& counters() const override { return counters_; }
+  void reset_counters() override { counters_ = CanCounters{}; }
 
   const CanErrorCounters& error_counters() const { return errors_; }
   const CanErrorInfo& last_error_frame() const { return last_error_frame_; }

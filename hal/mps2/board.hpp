@@ -65,6 +65,7 @@ class RingCanBus final : public hal::CanBus {
   [[nodiscard]] Status receive(hal::CanFrame& out) override;
   hal::CanBusState state() const override { return hal::CanBusState::kErrorActive; }
   const hal::CanCounters& counters() const override { return counters_; }
+  void reset_counters() override { counters_ = hal::CanCounters{}; }
 
   // kOk: the oldest queued frame moved to `out`. kEmpty: ring empty.
   [[nodiscard]] Status pop_sent(hal::CanFrame& out);

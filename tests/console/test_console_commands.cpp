@@ -15,6 +15,7 @@
 #include "console_rig.hpp"
 #include "estimator/params.hpp"
 #include "firmware/console/console.hpp"
+#include "firmware/param_text.hpp"
 #include "firmware/console/log.hpp"
 
 namespace uwbnav {
@@ -79,10 +80,16 @@ TEST(ConsoleCommands, VersionShowsBuildGitHashAndChecksums) {
 TEST(ConsoleCommands, StatusReportsTheLastOutputAndSensorAges) {
   ConsoleRig rig(sim_recording());
   rig.run_s(20.0);
-  const auto lines = reply_lines(rig.command("status"));
+  // The reply describes the cycle that ran the command; its line (with every
+  // reset counter) is longer than one cycle's TX budget, so it ends a cycle later.
+  rig.serial.output.clear();
+  rig.serial.type("status\r");
+  rig.tick();
+  const NavOutput o = rig.app.last_output();
+  for (int i = 0; i < 5; ++i) rig.tick();
+  const auto lines = reply_lines(rig.serial.output);
   ASSERT_EQ(lines.size(), 1U);
   const std::string& l = lines[0];
-  const NavOutput& o = rig.app.last_output();
   EXPECT_EQ(kv(l, "mode"), nav_status_name(o.status));
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.3f", static_cast<double>(o.pos_nav_m.x));
@@ -102,38 +109,45 @@ TEST(ConsoleCommands, StatsShowsLoopSourcesRejectsCanNavAndConsoleCounters) {
   rig.run_s(5.0);
   const uint32_t tx_before = rig.can.counters().tx_ok;  // the firmware keeps sending while the reply goes out
   const auto lines = reply_lines(rig.command("stats"));
-  ASSERT_EQ(lines.size(), 7U);
+  ASSERT_EQ(lines.size(), 8U);
   const AppStats& s = rig.app.stats();
   EXPECT_EQ(lines[0].rfind("stats loop ", 0), 0U);
   EXPECT_EQ(kv(lines[0], "overruns"), "1");
   EXPECT_EQ(kv(lines[0], "cycle_min_us"), "120");
   EXPECT_EQ(kv(lines[0], "cycle_avg_us"), "300");
   EXPECT_EQ(kv(lines[0], "cycle_max_us"), "480");
-  EXPECT_EQ(kv(lines[1], "src"), "imu");
-  EXPECT_EQ(kv(lines[2], "src"), "uwb");
-  EXPECT_EQ(kv(lines[3], "src"), "can_rx");
-  EXPECT_EQ(kv(lines[2], "received"), std::to_string(s.uwb.received));
-  EXPECT_EQ(kv(lines[2], "accepted"), std::to_string(s.uwb.accepted));
+  // Cycle latency = start lateness + work: 125 us and 489 us, both in the le500 bin.
+  EXPECT_EQ(lines[1].rfind("stats latency ", 0), 0U);
+  EXPECT_EQ(kv(lines[1], "max_us"), "489");
+  EXPECT_EQ(kv(lines[1], "le200"), "1");
+  EXPECT_EQ(kv(lines[1], "le500"), "1");
+  EXPECT_EQ(kv(lines[1], "le50"), "0");
+  EXPECT_EQ(kv(lines[1], "gt50000"), "0");
+  EXPECT_EQ(kv(lines[2], "src"), "imu");
+  EXPECT_EQ(kv(lines[3], "src"), "uwb");
+  EXPECT_EQ(kv(lines[4], "src"), "can_rx");
+  EXPECT_EQ(kv(lines[3], "received"), std::to_string(s.uwb.received));
+  EXPECT_EQ(kv(lines[3], "accepted"), std::to_string(s.uwb.accepted));
   for (uint32_t r = 0; r < kNumRejectReasons; ++r) {
     const char* name = reject_reason_name(static_cast<RejectReason>(r));
-    EXPECT_EQ(kv(lines[2], name), std::to_string(s.uwb.rejected[r])) << name;
+    EXPECT_EQ(kv(lines[3], name), std::to_string(s.uwb.rejected[r])) << name;
   }
-  EXPECT_EQ(lines[4].rfind("stats can ", 0), 0U);
-  EXPECT_GE(kv_num(lines[4], "tx_ok"), tx_before);
-  EXPECT_LE(kv_num(lines[4], "tx_ok"), rig.can.counters().tx_ok);
-  EXPECT_EQ(kv(lines[4], "bus_off"), std::to_string(rig.can.counters().bus_off));
-  EXPECT_EQ(lines[5].rfind("stats nav ", 0), 0U);
-  EXPECT_EQ(kv(lines[5], "ranges_used"), std::to_string(rig.app.navigator().diagnostics().ranges_used));
-  EXPECT_EQ(lines[6].rfind("stats console ", 0), 0U);
+  EXPECT_EQ(lines[5].rfind("stats can ", 0), 0U);
+  EXPECT_GE(kv_num(lines[5], "tx_ok"), tx_before);
+  EXPECT_LE(kv_num(lines[5], "tx_ok"), rig.can.counters().tx_ok);
+  EXPECT_EQ(kv(lines[5], "bus_off"), std::to_string(rig.can.counters().bus_off));
+  EXPECT_EQ(lines[6].rfind("stats nav ", 0), 0U);
+  EXPECT_EQ(kv(lines[6], "ranges_used"), std::to_string(rig.app.navigator().diagnostics().ranges_used));
+  EXPECT_EQ(lines[7].rfind("stats console ", 0), 0U);
 }
 
 TEST(ConsoleCommands, StatsShowsCanBusOffFromTheBoard) {
   ConsoleRig rig(sim_recording());
   rig.can.set_state(hal::CanBusState::kBusOff);
   const auto lines = reply_lines(rig.command("stats"));
-  ASSERT_EQ(lines.size(), 7U);
-  EXPECT_EQ(kv(lines[4], "state"), "bus_off");
-  EXPECT_EQ(kv(lines[4], "bus_off"), "1");
+  ASSERT_EQ(lines.size(), 8U);
+  EXPECT_EQ(kv(lines[5], "state"), "bus_off");
+  EXPECT_EQ(kv(lines[5], "bus_off"), "1");
 }
 
 TEST(ConsoleCommands, AnchorsListsEverySiteAnchorWithItsCounters) {
@@ -245,6 +259,30 @@ TEST(ConsoleCommands, BadParamValuesAreRejectedWithOneErrorLineAndLeaveTheParame
   EXPECT_EQ(lines.at(0), "error: param: can.tx_enable=2 out of range [0, 1]; unchanged");
 }
 
+// The console and the CLI (--param, tests/scripts/cli_errors.cmake) refuse with the
+// same words (firmware/param_text.hpp): which parameter, which value, why.
+TEST(ConsoleCommands, FractionsOfWholeKindParametersAreRefusedInTheCliWording) {
+  ConsoleRig rig(sim_recording());
+  const Params before = rig.app.params();
+  EXPECT_EQ(reply_lines(rig.command("param set can.tx_enable 0.5")).at(0),
+            "error: param: can.tx_enable=0.5 is not a whole number (bool parameter); unchanged");
+  EXPECT_EQ(reply_lines(rig.command("param set gate.policy 3.5")).at(0),
+            "error: param: gate.policy=3.5 is not a whole number (enum parameter); unchanged");
+  EXPECT_EQ(reply_lines(rig.command("param set uwb.sigma abc")).at(0),
+            "error: param: uwb.sigma=abc is not a finite number; unchanged");
+  EXPECT_EQ(reply_lines(rig.command("param set uwb.sigma 9")).at(0),
+            "error: param: uwb.sigma=9 out of range [0.01, 5]; unchanged");
+  EXPECT_TRUE(params_equal(rig.app.params(), before));
+  char why[kParamErrorMax];
+  const ParamDef* def = nullptr;
+  float value = 0.0F;
+  ASSERT_FALSE(ok(parse_param_value("gate.policy", "3.5", &def, &value, why, sizeof why)));
+  EXPECT_STREQ(why, "gate.policy=3.5 is not a whole number (enum parameter)");
+  ASSERT_TRUE(ok(parse_param_value("gate.policy", "3", &def, &value, why, sizeof why)));
+  EXPECT_EQ(def->index, ParamId::kGatePolicy);
+  EXPECT_EQ(value, 3.0F);
+}
+
 TEST(ConsoleCommands, ParamSaveAndLoadGoThroughTheParameterStore) {
   const std::string path = (std::filesystem::temp_directory_path() / "uwbnav_console_params.bin").string();
   std::filesystem::remove(path);
@@ -338,6 +376,83 @@ TEST(ConsoleCommands, ResetStatsZeroesTheCountersAndResetFilterRestartsTheEstima
   rig.tick();  // the output of the cycle after the reset
   EXPECT_EQ(rig.app.last_output().status, NavStatus::kInitialising);
   EXPECT_EQ(reply_lines(rig.command("reset everything")).at(0), "error: reset: usage: reset filter|stats");
+}
+
+TEST(ConsoleCommands, StatusCountsEveryKindOfResetIncludingTheOperatorsResetFilter) {
+  ConsoleRig rig(sim_recording());
+  rig.run_s(10.0);
+  const NavDiagnostics& dg = rig.app.navigator().diagnostics();
+  auto status = [&]() { return reply_lines(rig.command("status")).at(0); };
+  std::string l = status();
+  EXPECT_EQ(kv(l, "operator_resets"), "0");
+  EXPECT_EQ(kv(l, "resets"), std::to_string(dg.resets));
+  EXPECT_EQ(kv(l, "inflations"), std::to_string(dg.inflations));
+  EXPECT_EQ(kv(l, "reanchors"), std::to_string(dg.reanchors));
+  EXPECT_EQ(kv(l, "reinits"), std::to_string(dg.reinits));
+  EXPECT_EQ(kv(l, "integrity_fails"), std::to_string(dg.integrity_fails));
+  (void)rig.command("reset filter");
+  (void)rig.command("reset filter");
+  l = status();
+  EXPECT_EQ(kv(l, "operator_resets"), "2");
+  const auto stats = reply_lines(rig.command("stats"));
+  EXPECT_EQ(kv(lines_with_prefix(stats, "stats nav ").at(0), "operator_resets"), "2");
+}
+
+TEST(ConsoleCommands, ResetStatsZeroesInputCanNavigatorAndConsoleCounters) {
+  ConsoleRig rig(sim_recording());
+  rig.run_s(15.0);
+  (void)rig.command("reset filter");
+  auto stats = reply_lines(rig.command("stats"));
+  const std::string nav_before = lines_with_prefix(stats, "stats nav ").at(0);
+  const std::string can_before = lines_with_prefix(stats, "stats can ").at(0);
+  ASSERT_GT(kv_num(nav_before, "ranges_used"), 100.0);
+  ASSERT_GT(kv_num(can_before, "tx_ok"), 500.0);
+  const uint32_t published_before = rig.app.can_tx_stats().sent;
+  ASSERT_GT(published_before, 500U);
+  EXPECT_EQ(kv(nav_before, "operator_resets"), "1");
+  EXPECT_EQ(reply_lines(rig.command("reset stats")).at(0), "reset stats=ok");
+  stats = reply_lines(rig.command("stats"));  // runs a few cycles: counts since the reset only
+  const std::string nav = lines_with_prefix(stats, "stats nav ").at(0);
+  const std::string can = lines_with_prefix(stats, "stats can ").at(0);
+  EXPECT_LT(kv_num(nav, "ranges_used"), 20.0);
+  EXPECT_LT(kv_num(nav, "imu_samples"), 100.0);
+  EXPECT_EQ(kv(nav, "operator_resets"), "0");
+  EXPECT_LT(kv_num(can, "tx_ok"), 100.0);
+  EXPECT_LT(rig.app.can_tx_stats().sent, 100U);  // the publisher's counters too
+  EXPECT_LT(kv_num(lines_with_prefix(stats, "stats src=").at(0), "received"), 100.0);
+  EXPECT_EQ(kv(reply_lines(rig.command("status")).at(0), "operator_resets"), "0");
+  // The estimator and the bus keep counting monotonically (CAN diagnostics carry those).
+  EXPECT_EQ(rig.app.navigator().diagnostics().operator_resets, 1U);
+}
+
+TEST(ConsoleCommands, ParamListFiltersByGlobAndByChangedFromDefault) {
+  ConsoleRig rig(sim_recording());
+  size_t gate = 0;
+  for (const ParamDef& d : kParamDefs) gate += std::string(d.name).rfind("gate.", 0) == 0 ? 1U : 0U;
+  ASSERT_GT(gate, 2U);
+  auto lines = reply_lines(rig.command("param list gate.*"));
+  ASSERT_EQ(lines.size(), gate + 1);
+  EXPECT_EQ(kv(lines[0], "count"), std::to_string(gate));
+  for (size_t i = 1; i < lines.size(); ++i) EXPECT_EQ(kv(lines[i], "name").rfind("gate.", 0), 0U) << lines[i];
+  lines = reply_lines(rig.command("param list -c"));
+  ASSERT_EQ(lines.size(), 1U);
+  EXPECT_EQ(lines[0], "param count=0");
+  (void)rig.command("param set uwb.sigma 0.3");
+  (void)rig.command("param set gate.innov_sigma 9");
+  lines = reply_lines(rig.command("param list -c"));
+  ASSERT_EQ(lines.size(), 3U);
+  EXPECT_EQ(kv(lines[1], "name"), "uwb.sigma");
+  EXPECT_EQ(kv(lines[2], "name"), "gate.innov_sigma");
+  lines = reply_lines(rig.command("param list -c gate.*"));
+  ASSERT_EQ(lines.size(), 2U);
+  EXPECT_EQ(kv(lines[1], "name"), "gate.innov_sigma");
+  lines = reply_lines(rig.command("param list uwb.sig?a"));
+  ASSERT_EQ(lines.size(), 2U);
+  EXPECT_EQ(kv(lines[1], "value"), "0.3");
+  EXPECT_EQ(reply_lines(rig.command("param list no.such.*")).at(0), "param count=0");
+  EXPECT_EQ(reply_lines(rig.command("param list -x")).at(0).rfind("error: param: usage: param list [-c] [GLOB]", 0),
+            0U);
+  EXPECT_EQ(reply_lines(rig.command("param list")).size(), kNumParams + 1);  // no filter left behind
 }
 
 TEST(ConsoleCommands, HistoryListsAndBangBangRepeats) {

@@ -13,6 +13,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <functional>
 #include <fstream>
@@ -282,6 +283,65 @@ TEST(HostSerial, StdioPortIsNonBlockingOnPipesAndRestoresTheFlags) {
   ::close(in[0]);
   ::close(out[0]);
   ::close(out[1]);
+}
+
+// stdio console on a terminal (`uwbnav firmware --console stdio`): in raw mode
+// Ctrl-C reaches the console as a byte (its line editor drops the line, as over
+// the pty) instead of killing the process, Ctrl-D ends the input like end of
+// file on a pipe, and the terminal's attributes come back afterwards.
+TEST(HostSerial, StdioPortOnARawTerminalPassesCtrlCAndEndsTheInputAtCtrlD) {
+  const int master = ::posix_openpt(O_RDWR | O_NOCTTY);
+  ASSERT_GE(master, 0);
+  ASSERT_EQ(::grantpt(master), 0);
+  ASSERT_EQ(::unlockpt(master), 0);
+  const int slave = ::open(::ptsname(master), O_RDWR | O_NOCTTY);
+  ASSERT_GE(slave, 0);
+  termios before{};
+  ASSERT_EQ(::tcgetattr(slave, &before), 0);
+  ASSERT_NE(before.c_lflag & ISIG, 0U);  // a fresh terminal: Ctrl-C would be SIGINT
+  auto read_n = [](hal::StdioSerialPort& port, int fd, size_t n) {
+    std::string got;
+    uint8_t buf[64];
+    for (int i = 0; i < 100 && got.size() < n && !port.input_closed(); ++i) {
+      pollfd p{fd, POLLIN, 0};
+      (void)::poll(&p, 1, 100);  // waits for the bytes, not for time: no timing asserted
+      const size_t k = port.read(buf, sizeof buf);
+      got.append(reinterpret_cast<const char*>(buf), k);
+    }
+    return got;
+  };
+  {
+    hal::StdioSerialPort port(slave, slave);
+    ASSERT_TRUE(port.raw_terminal());
+    termios raw{};
+    ASSERT_EQ(::tcgetattr(slave, &raw), 0);
+    EXPECT_EQ(raw.c_lflag & (ISIG | ICANON | ECHO), 0U);
+    ASSERT_EQ(::write(master, "abc\x03", 4), 4);
+    EXPECT_EQ(read_n(port, slave, 4), std::string("abc\x03"));
+    EXPECT_FALSE(port.input_closed());
+    ASSERT_EQ(::write(master, "xy\x04zz", 5), 5);
+    EXPECT_EQ(read_n(port, slave, 5), "xy");
+    EXPECT_TRUE(port.input_closed());
+    uint8_t buf[8];
+    EXPECT_EQ(port.read(buf, sizeof buf), 0U);
+  }
+  termios after{};
+  ASSERT_EQ(::tcgetattr(slave, &after), 0);
+  EXPECT_EQ(after.c_lflag, before.c_lflag);
+  EXPECT_EQ(after.c_iflag, before.c_iflag);
+  ::close(slave);
+  ::close(master);
+}
+
+TEST(HostSerial, StdioPortLeavesAPipeAloneWhenAskedForARawTerminal) {
+  int in[2];
+  ASSERT_EQ(::pipe(in), 0);
+  {
+    hal::StdioSerialPort port(in[0], 1);
+    EXPECT_FALSE(port.raw_terminal());
+  }
+  ::close(in[0]);
+  ::close(in[1]);
 }
 
 }  // namespace

@@ -240,7 +240,11 @@ TEST(DatasetReader, MissingRequiredFilesFailWithTheirName) {
   Recording rec;
   ReadReport rep;
   EXPECT_EQ(read_recording(dir + "/does_not_exist", rec, rep), Status::kNotFound);
-  EXPECT_NE(rep.error.find("anchors.csv"), std::string::npos) << rep.error;
+  EXPECT_NE(rep.error.find("does_not_exist: no such directory"), std::string::npos) << rep.error;
+
+  rep = ReadReport{};
+  EXPECT_EQ(read_recording(dir, rec, rep), Status::kNotFound);  // empty directory
+  EXPECT_NE(rep.error.find("anchors.csv: required file missing"), std::string::npos) << rep.error;
 
   write_file(dir + "/anchors.csv", kAnchorsOk);
   rep = ReadReport{};
@@ -381,6 +385,27 @@ TEST(DatasetReader, SecondsToMicrosecondsRoundsToNearest) {
   EXPECT_EQ(seconds_to_us(-1.0), 0U);
   EXPECT_EQ(seconds_to_us(std::nan("")), 0U);
   EXPECT_DOUBLE_EQ(us_to_seconds(1500000U), 1.5);
+}
+
+TEST(DatasetReader, AStreamEndingMoreThanASecondBeforeTheOtherIsReported) {
+  Recording rec;
+  for (uint64_t t_us = 0; t_us <= 10000000; t_us += 100000) {
+    UwbRow row;
+    row.range.t_us = t_us;
+    rec.uwb.push_back(row);
+  }
+  for (uint64_t t_us = 0; t_us <= 10000000; t_us += 10000) {
+    ImuSample s;
+    s.t_us = t_us;
+    rec.imu.push_back(s);
+  }
+  EXPECT_TRUE(streams_ended_early(rec).empty());
+  rec.imu.resize(rec.imu.size() / 2 + 1);  // IMU stops at 5 s
+  const auto lines = streams_ended_early(rec);
+  ASSERT_EQ(lines.size(), 1U);
+  EXPECT_EQ(lines[0], "imu.csv: ends at t=5.000 s, 5.000 s before uwb.csv (last 10.000 s): input stream ended early");
+  rec.imu.clear();  // a UWB-only recording has no IMU stream to end early
+  EXPECT_TRUE(streams_ended_early(rec).empty());
 }
 
 }  // namespace

@@ -19,6 +19,7 @@
 #include "tools/eval/metrics.hpp"
 #include "tools/eval/replay.hpp"
 #include "tools/hil/clock_mapped_sources.hpp"
+#include "tools/hil/hil_rig.hpp"
 #include "tools/hil/output_monitor.hpp"
 #include "tools/hil/sensor_stream.hpp"
 #include "tools/sim/scenario.hpp"
@@ -309,6 +310,38 @@ TEST(Hil, ClockMappedReplaySourcesReleaseSamplesAtTheirClockTime) {
   uint64_t t_rec = 0;
   ASSERT_TRUE(map.to_rec_us(t_first, &t_rec));
   EXPECT_EQ(t_rec, rec.imu.front().t_us);
+}
+
+// issue 18: `uwbnav hil --max-latency-ms 5` passed a run whose largest latency
+// was 27.5 ms because it checked the p99. The max and the p99 are separate checks.
+TEST(HilChecks, MaxLatencyBoundsTheLargestLatencyAndP99IsASeparateCheck) {
+  hil::HilReport r;
+  r.latency_ms.n = 2000;
+  r.latency_ms.p99 = 4.1;
+  r.latency_ms.max = 27.5;
+  int failures = 0;
+  hil::HilLimits limits;
+  limits.max_latency_ms = 5.0;
+  auto lines = hil::check_report(r, limits, &failures);
+  EXPECT_EQ(failures, 1);
+  ASSERT_EQ(lines.size(), 1U);
+  EXPECT_EQ(lines[0], "CHECK FAILED: latency max [ms] = 27.5000 exceeds 5.0000");
+  failures = 0;
+  limits = hil::HilLimits{};
+  limits.max_latency_p99_ms = 5.0;
+  lines = hil::check_report(r, limits, &failures);
+  EXPECT_EQ(failures, 0);
+  ASSERT_EQ(lines.size(), 1U);
+  EXPECT_EQ(lines[0], "CHECK passed: latency p99 [ms] = 4.1000 <= 5.0000");
+  failures = 0;
+  limits.max_latency_ms = 30.0;
+  lines = hil::check_report(r, limits, &failures);
+  EXPECT_EQ(failures, 0);
+  EXPECT_EQ(lines.size(), 2U);
+  r.latency_ms = hil::SeriesStats{};  // no latency measured: a requested check cannot pass
+  failures = 0;
+  (void)hil::check_report(r, limits, &failures);
+  EXPECT_EQ(failures, 2);
 }
 
 }  // namespace

@@ -152,6 +152,34 @@ TEST(RealtimeLoop, StartJitterAndWorkTimeAreRecorded) {
   EXPECT_EQ(l.avg_us(), 2000U);
 }
 
+// The cycle-latency histogram (console `stats latency`, firmware exit summary,
+// HIL report): deadline to end of work = wake-up latency + work, per bin.
+TEST(RealtimeLoop, CycleLatencyHistogramCountsWakeupLatencyPlusWorkPerBin) {
+  Rig rig(0);
+  rig.clock.wake_latency_us = 700;
+  rig.script.work_us = [](size_t k) -> uint64_t { return k < 6 ? 100 : (k < 9 ? 1500 : 12000); };
+  RealtimeLoop(*rig.app, rig.clock).run(rig.stop, 10);
+  const LoopStats& l = rig.app->stats().loop;
+  EXPECT_EQ(l.latency_hist[latency_bin(800)], 6U);    // 700 + 100 us: <= 1000 bin
+  EXPECT_EQ(l.latency_hist[latency_bin(2200)], 3U);   // 700 + 1500 us: <= 5000 bin
+  EXPECT_EQ(l.latency_hist[latency_bin(12700)], 1U);  // 700 + 12000 us: <= 20000 bin, an overrun
+  EXPECT_EQ(l.latency_max_us, 12700U);
+  EXPECT_EQ(l.overruns, 1U);
+  uint64_t total = 0;
+  for (uint32_t n : l.latency_hist) total += n;
+  EXPECT_EQ(total, l.cycles);
+}
+
+TEST(RealtimeLoop, LatencyBinsAreInclusiveUpperBoundsWithAnOpenLastBin) {
+  EXPECT_EQ(latency_bin(0), 0U);
+  EXPECT_EQ(latency_bin(50), 0U);
+  EXPECT_EQ(latency_bin(51), 1U);
+  EXPECT_EQ(latency_bin(10000), 7U);
+  EXPECT_EQ(latency_bin(50000), kNumLatencyBins - 2);
+  EXPECT_EQ(latency_bin(50001), kNumLatencyBins - 1);
+  EXPECT_EQ(latency_bin(UINT32_MAX), kNumLatencyBins - 1);
+}
+
 TEST(RealtimeLoop, StopFlagRaisedInsideACycleEndsTheRunAfterThatCycle) {
   Rig rig(0);
   rig.script.stop_after = 7;

@@ -8,8 +8,10 @@
 # - no output frame lost, no E2E failure (--max-missing 0): the link is lossless
 #   and the rig drains it at least every 20 ms while the socket buffers about
 #   0.5 s of frames, so only a stall of the rig of that order could lose frames;
-# - latency p99 < 30 ms (three cycles): measured p99 4 ms on a 2-core machine
-#   at load 7-11; a loaded CI box can delay single wake-ups by several ms;
+# - latency p99 < 30 ms (three cycles, --max-latency-p99-ms): measured p99 4 ms
+#   on a 2-core machine at load 7-11; a loaded CI box can delay single wake-ups
+#   by several ms. The max is reported and checked only loosely (--max-latency-ms
+#   1000: a stalled path), as a shared CI machine can stall one wake-up;
 # - horizontal RMSE < 1 m: measured 0.14 m, same as the lockstep replay; the
 #   bound only proves the received positions are the navigation solution.
 if(TARGET uwbnav)
@@ -22,12 +24,13 @@ if(TARGET uwbnav)
 
   add_test(NAME hil_spawned_firmware_over_can_link_realtime
     COMMAND uwbnav hil ${hil_dir}/rec --spawn --out ${hil_dir}/out
-      --max-missing 0 --max-latency-ms 30 --max-rmse-m 2.5)
+      --max-missing 0 --max-latency-p99-ms 30 --max-latency-ms 1000 --max-rmse-m 2.5)
   # The RMSE bound is a sanity check of the transport: it counts every published
   # epoch, the parked start with two of four anchors blocked (ranges-only, aligning) included.
   set_tests_properties(hil_spawned_firmware_over_can_link_realtime PROPERTIES
     FIXTURES_REQUIRED hil_rec LABELS realtime RUN_SERIAL TRUE TIMEOUT 180
-    PASS_REGULAR_EXPRESSION "CHECKS PASSED" FAIL_REGULAR_EXPRESSION "CHECK FAILED")
+    PASS_REGULAR_EXPRESSION "hil: +[0-9.]+ of [0-9.]+ s played.*latency histogram +solutions per bin.*firmware cycles +deadline to end of work.*CHECK passed: latency max \\[ms\\].*CHECK passed: latency p99 \\[ms\\].*CHECKS PASSED"
+    FAIL_REGULAR_EXPRESSION "CHECK FAILED")
 
   # The firmware process replaying a recording in real time stops after --duration and prints its loop stats.
   add_test(NAME hil_firmware_process_replays_recording_for_duration
@@ -35,7 +38,7 @@ if(TARGET uwbnav)
       --can-log ${hil_dir}/firmware_replay_can.log)
   set_tests_properties(hil_firmware_process_replays_recording_for_duration PROPERTIES
     FIXTURES_REQUIRED hil_rec LABELS realtime TIMEOUT 60
-    PASS_REGULAR_EXPRESSION "stopped \\(duration\\).*loop +cycles [1-9][0-9]+ .*CAN tx +sent [1-9][0-9]+ ")
+    PASS_REGULAR_EXPRESSION "stopped \\(duration\\).*loop +cycles [1-9][0-9]+ .*latency +deadline to end of work: max [0-9]+ us; cycles per bin: <=50:[0-9]+ .* >50000:[0-9]+.*rt +(mlockall|off).*CAN log +written [1-9][0-9]+ +overflow 0 .*CAN tx +sent [1-9][0-9]+ ")
 
   # Without AF_CAN (this build machine) or without the interface, --can-if fails with a clear reason.
   add_test(NAME hil_firmware_can_if_fails_clearly_without_interface

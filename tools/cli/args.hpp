@@ -10,16 +10,20 @@
 #include <string>
 #include <vector>
 
+#include "firmware/param_text.hpp"
+
 namespace uwbnav::cli {
 
 class Args {
  public:
   // `flags` are options without a value; every other --option takes one value.
+  // --help is always a flag (unknown to every command: the command prints its usage,
+  // and main turns `uwbnav CMD --help` into exit 0 with the usage on stdout).
   Args(int argc, char** argv, const std::vector<std::string>& flags) {
     for (int i = 1; i < argc; ++i) {
       std::string a = argv[i];
       if (a.rfind("--", 0) == 0) {
-        const bool is_flag = std::find(flags.begin(), flags.end(), a) != flags.end();
+        const bool is_flag = a == "--help" || std::find(flags.begin(), flags.end(), a) != flags.end();
         if (is_flag) {
           options_[a].push_back("1");
         } else if (i + 1 < argc) {
@@ -69,15 +73,32 @@ class Args {
   std::string error_;
 };
 
-// Parses "name=value" parameter overrides (--param). False on malformed input.
-inline bool parse_param_override(const std::string& s, std::pair<std::string, float>* out) {
-  const size_t eq = s.find('=');
-  if (eq == std::string::npos || eq == 0) return false;
-  char* end = nullptr;
-  const std::string v = s.substr(eq + 1);
-  const float x = std::strtof(v.c_str(), &end);
-  if (v.empty() || *end != '\0') return false;
-  *out = {s.substr(0, eq), x};
+// "NAME=VALUE" (command-line form) through parse_param_value; a text without
+// '=' or without a name gives "'TEXT' is not NAME=VALUE".
+inline Status parse_param_assignment(const std::string& text, const ParamDef** def, float* value, char* msg,
+                                     size_t cap) {
+  const size_t eq = text.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    std::snprintf(msg, cap, "'%s' is not NAME=VALUE", text.c_str());
+    return Status::kInvalidArgument;
+  }
+  return parse_param_value(text.substr(0, eq).c_str(), text.c_str() + eq + 1, def, value, msg, cap);
+}
+
+// Parses every --param NAME=VALUE of `args` (after the table: bounds, whole-number
+// kinds). On the first bad one prints "PROG: param: <reason>" (the console's
+// wording, firmware/param_text.hpp) and returns false.
+inline bool parse_param_options(const Args& args, const char* prog, std::vector<std::pair<std::string, float>>* out) {
+  for (const auto& text : args.all("--param")) {
+    const ParamDef* def = nullptr;
+    float value = 0.0F;
+    char why[kParamErrorMax];
+    if (!ok(parse_param_assignment(text, &def, &value, why, sizeof why))) {
+      std::fprintf(stderr, "%s: param: %s\n", prog, why);
+      return false;
+    }
+    out->emplace_back(def->name, value);
+  }
   return true;
 }
 

@@ -1,18 +1,27 @@
 // `uwbnav firmware`: the firmware as a real-time host process ("PC board"):
 // RealtimeClock + RealtimeLoop drive App::tick every 10 ms; sensors come from
 // a recording replayed in real time or from a HIL rig over CAN (docs/hil.md).
+#include <pthread.h>
+#include <sched.h>
 #include <signal.h>
+#include <sys/mman.h>
 #include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
+#include <functional>
 #include <memory>
 #include <string>
 
 #include "firmware/app.hpp"
 #include "firmware/realtime_loop.hpp"
+#include "hal/host/async_can_log.hpp"
+#include "hal/host/async_serial.hpp"
 #include "hal/host/candump_log.hpp"
 #include "hal/host/file_param_store.hpp"
 #include "hal/host/idle_sources.hpp"
@@ -54,32 +63,99 @@ uint64_t clock_us(clockid_t id) {
   return static_cast<uint64_t>(ts.tv_sec) * 1000000U + static_cast<uint64_t>(ts.tv_nsec) / 1000U;
 }
 
-// Ends the run when the replayed recording is exhausted; reports a rig that went away.
+// Ends the run when the replayed recording is exhausted or the stdio console's
+// input ended (once the console has answered and flushed, at most 2 s later);
+// reports a rig that went away.
 class RunWatch final : public AppObserver {
  public:
-  RunWatch(const hal::ImuSource& imu, const hal::UwbSource& uwb, bool replay, const hal::CanBus& bus, bool link)
-      : imu_(imu), uwb_(uwb), replay_(replay), bus_(bus), link_(link) {}
+  RunWatch(const hal::ImuSource& imu, const hal::UwbSource& uwb, bool replay, const hal::CanBus& bus, bool link,
+           const hal::AsyncSerialPort* stdio, const Console& console)
+      : imu_(imu), uwb_(uwb), replay_(replay), bus_(bus), link_(link), stdio_(stdio), console_(console) {}
   void on_range(const RangeReport&) override {}
   void on_output(const NavOutput&) override {
     if (replay_ && imu_.finished() && uwb_.finished()) {
       end_of_recording = true;
       g_stop = true;
     }
-    if (link_ && !reported_down_ && bus_.state() == hal::CanBusState::kDown) {
-      reported_down_ = true;
-      std::fprintf(stderr, "firmware: CAN link closed by the peer; running on until stopped\n");
+    if (stdio_ != nullptr && stdio_->input_closed()) {
+      ++cycles_since_eof_;
+      idle_cycles_ = console_.busy() ? 0 : idle_cycles_ + 1;
+      if (idle_cycles_ >= kIdleCyclesToStop || cycles_since_eof_ >= kMaxCyclesAfterEof) {
+        end_of_input = true;
+        g_stop = true;
+      }
     }
+    if (link_ && !link_closed && bus_.state() == hal::CanBusState::kDown) {
+      link_closed = true;  // reported after the loop: no terminal I/O inside the cycle
+      link_closed_cycle = cycles_;
+    }
+    ++cycles_;
   }
   bool end_of_recording = false;
+  bool end_of_input = false;
+  bool link_closed = false;
+  uint64_t link_closed_cycle = 0;
 
  private:
+  static constexpr uint32_t kIdleCyclesToStop = 5;      // console idle this long after end of input
+  static constexpr uint32_t kMaxCyclesAfterEof = 200;   // 2 s: a stream keeps it busy forever
   const hal::ImuSource& imu_;
   const hal::UwbSource& uwb_;
   bool replay_;
   const hal::CanBus& bus_;
   bool link_;
-  bool reported_down_ = false;
+  const hal::AsyncSerialPort* stdio_;
+  const Console& console_;
+  uint32_t cycles_since_eof_ = 0;
+  uint32_t idle_cycles_ = 0;
+  uint64_t cycles_ = 0;
 };
+
+// Real-time setup of the loop thread (Linux): memory locked against page
+// faults, SCHED_FIFO at `priority`. Each step that is not permitted leaves a
+// note and the run goes on without it.
+struct RtSetup {
+  bool mlocked = false;
+  bool fifo = false;
+  int priority = 0;
+  std::string note;  // what could not be done and why
+};
+
+RtSetup setup_realtime(int priority) {
+  RtSetup rt;
+  if (::mlockall(MCL_CURRENT | MCL_FUTURE) == 0) {
+    rt.mlocked = true;
+  } else {
+    rt.note += std::string("mlockall failed (") + std::strerror(errno) +
+               ": needs CAP_IPC_LOCK or RLIMIT_MEMLOCK above the process size), page faults can delay cycles; ";
+  }
+  // Pre-fault the stack the cycle will use, so that its first deep call does not fault.
+  volatile uint8_t stack_touch[256 * 1024];
+  for (size_t i = 0; i < sizeof stack_touch; i += 4096) stack_touch[i] = 0;
+  sched_param sp{};
+  sp.sched_priority = priority;
+  if (::pthread_setschedparam(::pthread_self(), SCHED_FIFO, &sp) == 0) {
+    rt.fifo = true;
+    rt.priority = priority;
+  } else {
+    rt.note += "SCHED_FIFO not permitted (needs CAP_SYS_NICE or an rtprio limit, ulimit -r), running SCHED_OTHER: "
+               "other processes' CPU load delays cycles; ";
+  }
+  if (!rt.note.empty()) rt.note.resize(rt.note.size() - 2);
+  return rt;
+}
+
+void print_histogram(const LoopStats& l) {
+  std::printf("  latency  deadline to end of work: max %u us; cycles per bin:", l.latency_max_us);
+  for (uint32_t i = 0; i < kNumLatencyBins; ++i) {
+    if (i + 1 < kNumLatencyBins) {
+      std::printf(" <=%u:%u", kLatencyBinUpperUs[i], l.latency_hist[i]);
+    } else {
+      std::printf(" >%u:%u", kLatencyBinUpperUs[kNumLatencyBins - 2], l.latency_hist[i]);
+    }
+  }
+  std::printf("\n");
+}
 
 // Waits for the rig to connect to the link (until a signal or the duration).
 bool accept_rig(const std::string& path, uint64_t give_up_us, hal::SocketCanBus& bus) {
@@ -119,6 +195,10 @@ struct RunSummary {
   hal::CanCounters bus;
   const char* why = "signal";
   double wall_s = 0.0;
+  bool logged = false;
+  hal::AsyncLogCounters log;
+  RtSetup rt;
+  bool rt_requested = true;
 };
 
 void print_summary(const RunSummary& s) {
@@ -127,6 +207,18 @@ void print_summary(const RunSummary& s) {
   std::printf("  loop     cycles %llu  cycle min/avg/max %u/%u/%u us  overruns %llu  jitter max %u us\n",
               static_cast<unsigned long long>(l.cycles), l.cycle_min_us, l.avg_us(), l.cycle_max_us,
               static_cast<unsigned long long>(l.overruns), l.jitter_max_us);
+  print_histogram(l);
+  if (s.rt_requested) {
+    std::printf("  rt       mlockall %s, %s\n", s.rt.mlocked ? "yes" : "no",
+                s.rt.fifo ? ("SCHED_FIFO " + std::to_string(s.rt.priority)).c_str() : "SCHED_OTHER");
+  } else {
+    std::printf("  rt       off (--no-rt): SCHED_OTHER, memory not locked\n");
+  }
+  if (s.logged) {
+    std::printf("  CAN log  written %llu  overflow %llu  write errors %llu  queue high-water %zu of %zu frames\n",
+                static_cast<unsigned long long>(s.log.written), static_cast<unsigned long long>(s.log.overflow),
+                static_cast<unsigned long long>(s.log.write_errors), s.log.high_water, s.log.capacity);
+  }
   std::printf("  CAN tx   sent %u  dropped %u  failed %u  saturated %u\n", s.can_tx.sent, s.can_tx.dropped,
               s.can_tx.failed, s.can_tx.saturated);
   std::printf("  CAN rx   HIL frames %u  IMU %u  UWB %u  crc %u  counter %u  length %u  lost %u  incomplete %u\n",
@@ -149,18 +241,22 @@ void print_summary(const RunSummary& s) {
 }  // namespace
 
 int cmd_firmware(int argc, char** argv) {
-  Args args(argc, argv, {});
+  Args args(argc, argv, {"--no-rt"});
   const std::vector<std::string> known = {"--recording", "--can-link", "--can-if", "--console", "--params",
                                           "--can-log",   "--duration", "--site",   "--param",
-                                          "--cal"};
+                                          "--cal",       "--rt-priority", "--no-rt"};
   const std::string console = args.get("--console", "stdio");
   const char* usage =
       "usage: uwbnav firmware [--recording DIR | --can-link PATH | --can-if NAME] [--site DIR]\n"
       "                       [--console stdio|pty|none] [--params FILE] [--can-log FILE] [--duration S]\n"
-      "                       [--param name=value]... [--cal FILE]\n"
+      "                       [--param name=value]... [--cal FILE] [--rt-priority 1..99 | --no-rt]\n"
       "  sensors: --recording DIR replays DIR in real time; without it a HIL rig sends them over CAN\n"
       "  (can.hil_rx_enable = 1) and --site DIR (a recording) gives the anchors and tags\n"
-      "  --cal FILE: site range calibration loaded at start (uwbnav calibrate, docs/commissioning.md)\n";
+      "  --cal FILE: site range calibration loaded at start (uwbnav calibrate, docs/commissioning.md)\n"
+      "  exit status: 0 done, 1 input or start-up failure, 2 usage or parameter error,\n"
+      "  3 the recording's IMU or UWB stream ended early (replayed anyway)\n"
+      "  real time (docs/realtime.md): memory locked and the loop at SCHED_FIFO --rt-priority (default 80)\n"
+      "  when permitted, with a note when not; --no-rt runs without either\n";
   double duration_s = 0.0;
   if (args.has("--duration")) {
     const std::string text = args.get("--duration");  // keep alive: `end` points into it
@@ -168,7 +264,10 @@ int cmd_firmware(int argc, char** argv) {
     duration_s = std::strtod(text.c_str(), &end);
     if (*end != '\0' || !(duration_s > 0.0)) duration_s = -1.0;
   }
+  uint64_t rt_priority = 80;
+  const bool bad_priority = !args.get_u64("--rt-priority", 80, &rt_priority) || rt_priority < 1 || rt_priority > 99;
   if (!args.error().empty() || !args.positional().empty() || !args.unknown(known).empty() || duration_s < 0.0 ||
+      bad_priority || (args.has("--no-rt") && args.has("--rt-priority")) ||
       (console != "stdio" && console != "pty" && console != "none") ||
       (args.has("--can-link") && args.has("--can-if"))) {
     std::fprintf(stderr, "%s", usage);
@@ -194,20 +293,16 @@ int cmd_firmware(int argc, char** argv) {
     std::fprintf(stderr, "uwbnav firmware: cannot read %s: %s\n", site_dir.c_str(), read_report.error.c_str());
     return 1;
   }
+  // A recording whose streams end early is replayed, but the run says so and exits 3.
+  const std::vector<std::string> ended_early = replay ? dataset::streams_ended_early(rec) : std::vector<std::string>{};
+  for (const auto& line : ended_early) std::fprintf(stderr, "uwbnav firmware: warning: %s\n", line.c_str());
   if (!replay) {  // the site is all a HIL board takes from the recording
     rec.imu.clear();
     rec.uwb.clear();
   }
   if (!apply_cal_option(args, rec.site, "uwbnav firmware")) return 1;
   std::vector<std::pair<std::string, float>> overrides;
-  for (const auto& p : args.all("--param")) {
-    std::pair<std::string, float> kv;
-    if (!parse_param_override(p, &kv)) {
-      std::fprintf(stderr, "uwbnav firmware: --param expects name=value, got '%s'\n", p.c_str());
-      return 2;
-    }
-    overrides.push_back(kv);
-  }
+  if (!parse_param_options(args, "uwbnav firmware", &overrides)) return 2;
 
   install_signal_handlers();
   const uint64_t t_start_mono_us = clock_us(CLOCK_MONOTONIC);
@@ -234,7 +329,7 @@ int cmd_firmware(int argc, char** argv) {
       bus = &sock_bus;
     }
     hal::CandumpLogWriter can_log;
-    std::unique_ptr<hal::CanLogTee> tee;
+    std::unique_ptr<hal::AsyncCanLog> tee;  // frames leave the cycle through a bounded queue
     if (args.has("--can-log")) {
       const uint64_t epoch_offset_us = clock_us(CLOCK_REALTIME) - clock_us(CLOCK_MONOTONIC);
       const std::string ifname = socketcan ? args.get("--can-if") : "can0";
@@ -242,7 +337,8 @@ int cmd_firmware(int argc, char** argv) {
         std::fprintf(stderr, "uwbnav firmware: cannot write %s\n", args.get("--can-log").c_str());
         return 1;
       }
-      tee = std::make_unique<hal::CanLogTee>(*bus, can_log, true);
+      tee = std::make_unique<hal::AsyncCanLog>(*bus, can_log, true);
+      tee->start();  // before the loop thread turns SCHED_FIFO: the writer stays SCHED_OTHER
       bus = tee.get();
     }
 
@@ -254,6 +350,9 @@ int cmd_firmware(int argc, char** argv) {
     if (console == "stdio") {
       stdio_serial = std::make_unique<hal::StdioSerialPort>();
       serial = stdio_serial.get();
+      if (stdio_serial->raw_terminal()) {
+        std::printf("firmware: console on this terminal (raw: Ctrl-C drops the line, Ctrl-D ends the session)\n");
+      }
     } else if (console == "pty") {
       std::string err;
       if (!ok(pty_serial.open(&err))) {
@@ -264,6 +363,18 @@ int cmd_firmware(int argc, char** argv) {
                   pty_serial.slave_name().c_str());
       std::fflush(stdout);
       serial = &pty_serial;
+    }
+
+    // Terminal/pipe I/O leaves the cycle: the console talks to bounded rings that
+    // an I/O thread (SCHED_OTHER, started before the loop turns SCHED_FIFO) moves.
+    std::unique_ptr<hal::AsyncSerialPort> async_serial;
+    if (serial != &null_serial) {
+      hal::StdioSerialPort* stdio_port = stdio_serial.get();
+      std::function<bool()> closed;
+      if (stdio_port != nullptr) closed = [stdio_port] { return stdio_port->input_closed(); };
+      async_serial = std::make_unique<hal::AsyncSerialPort>(*serial, std::move(closed));
+      async_serial->start();
+      serial = async_serial.get();
     }
 
     // Parameters.
@@ -293,21 +404,32 @@ int cmd_firmware(int argc, char** argv) {
       return 1;
     }
     for (const auto& [name, value] : overrides) {
-      const ParamDef* d = Params::find(name.c_str());
+      const ParamDef* d = Params::find(name.c_str());  // checked by parse_param_options
       if (d == nullptr || !ok(app->set_param(d->index, value))) {
-        std::fprintf(stderr, "uwbnav firmware: bad parameter %s=%g\n", name.c_str(), static_cast<double>(value));
+        std::fprintf(stderr, "uwbnav firmware: param: %s refused by the firmware\n", name.c_str());
         return 2;
       }
     }
     if (!replay && !ok(app->set_param(ParamId::kCanHilRxEnable, 1.0F))) return 1;
 
-    RunWatch watch(imu, uwb, replay, *bus, link);
+    RunWatch watch(imu, uwb, replay, *bus, link, stdio_serial != nullptr ? async_serial.get() : nullptr,
+                   app->console());
     app->set_observer(&watch);
-    std::printf("firmware: running (%s sensors, CAN %s%s), stop with Ctrl-C\n",
+    std::printf("firmware: running (%s sensors, CAN %s%s), stop with Ctrl-C%s\n",
                 replay ? "recording" : "HIL CAN",
                 socketcan ? args.get("--can-if").c_str() : (link ? "link" : "in memory"),
-                args.has("--can-log") ? ", logged" : "");
+                args.has("--can-log") ? ", logged" : "",
+                stdio_serial != nullptr ? " (outside a raw terminal) or end of console input" : "");
     std::fflush(stdout);
+    summary.rt_requested = !args.has("--no-rt");
+    if (summary.rt_requested) {
+      summary.rt = setup_realtime(static_cast<int>(rt_priority));
+      std::printf("firmware: real time: memory %s, %s\n", summary.rt.mlocked ? "locked" : "not locked",
+                  summary.rt.fifo ? ("SCHED_FIFO priority " + std::to_string(summary.rt.priority)).c_str()
+                                  : "SCHED_OTHER");
+      if (!summary.rt.note.empty()) std::printf("firmware: note: %s\n", summary.rt.note.c_str());
+      std::fflush(stdout);
+    }
     RealtimeLoop loop(*app, clock);
     const uint64_t now_us = clock_us(CLOCK_MONOTONIC);
     uint64_t max_cycles = 0;
@@ -319,12 +441,25 @@ int cmd_firmware(int argc, char** argv) {
     summary.can_rx = app->can_rx_stats();
     summary.bus = bus->counters();
     summary.why = g_signal != 0 ? (g_signal == SIGINT ? "SIGINT" : "SIGTERM")
-                                : (watch.end_of_recording ? "end of recording" : "duration");
+                                : (watch.end_of_recording ? "end of recording"
+                                                          : (watch.end_of_input ? "end of console input" : "duration"));
+    if (async_serial != nullptr) async_serial->stop();  // the console's last output goes out
+    if (tee != nullptr) {
+      tee->stop();  // drains the queue into the log
+      summary.logged = true;
+      summary.log = tee->log_counters();
+    }
     if (can_log.is_open()) ignore_status(can_log.close());
+    if (watch.link_closed) {
+      std::fprintf(stderr, "firmware: CAN link closed by the peer at cycle %llu; ran on until stopped\n",
+                   static_cast<unsigned long long>(watch.link_closed_cycle));
+    }
   }
   summary.wall_s = static_cast<double>(clock_us(CLOCK_MONOTONIC) - t_start_mono_us) * 1e-6;
+  if (console == "stdio") std::printf("\n");  // end the console's prompt line
   print_summary(summary);
-  return 0;
+  for (const auto& line : ended_early) std::fprintf(stderr, "uwbnav firmware: %s\n", line.c_str());
+  return ended_early.empty() ? 0 : 3;
 }
 
 }  // namespace uwbnav::cli

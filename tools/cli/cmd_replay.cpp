@@ -1,9 +1,8 @@
 // `uwbnav replay DIR --out OUT [--param name=value]... [--cal FILE]` and
 // `uwbnav run` (the main job: simulate the default scenario, replay it, print the table).
-#include <sys/stat.h>
-
-#include <cerrno>
-
+// Exit status: 0 a solution over complete input; 1 unreadable input or failure
+// (nothing left in OUT); 2 usage or parameter error; 3 the replay ran but
+// produced no solution or an input stream ended early (outputs kept).
 #include <cstdio>
 #include <string>
 
@@ -18,32 +17,55 @@
 namespace uwbnav::cli {
 namespace {
 
-int replay_and_report(const dataset::Recording& rec, const std::string& out, const Args& args) {
+constexpr int kExitIncomplete = 3;
+
+// Epochs whose output carries a position (status valid or degraded), with or without truth.
+size_t solution_epochs(const eval::ReplayResult& result) {
+  size_t n = 0;
+  for (const auto& e : result.estimates) n += (e.status == 1 || e.status == 2) ? 1U : 0U;
+  return n;
+}
+
+int replay_and_report(const dataset::Recording& rec, const std::string& out, const Args& args, const char* who) {
   eval::ReplayOptions opt;
   opt.out_dir = out;
   opt.progress = args.has("--progress");
-  for (const auto& p : args.all("--param")) {
-    std::pair<std::string, float> kv;
-    if (!parse_param_override(p, &kv)) {
-      std::fprintf(stderr, "uwbnav: --param expects name=value, got '%s'\n", p.c_str());
-      return 2;
-    }
-    opt.params.push_back(kv);
-  }
-  if (!dataset::make_dirs(out)) {
-    std::fprintf(stderr, "uwbnav: cannot create %s\n", out.c_str());
+  if (!parse_param_options(args, who, &opt.params)) return 2;
+  dataset::OutputDir out_dir;
+  if (!out_dir.create(out)) {
+    std::fprintf(stderr, "%s: cannot create %s\n", who, out.c_str());
     return 1;
   }
   eval::ReplayResult result;
   std::string err;
-  if (!ok(eval::run_replay(rec, opt, result, &err))) {
-    std::fprintf(stderr, "uwbnav: %s\n", err.c_str());
-    return 1;
+  const Status s = eval::run_replay(rec, opt, result, &err);
+  if (!ok(s)) {
+    std::fprintf(stderr, "%s: %s\n", who, err.c_str());
+    return s == Status::kNotFound || s == Status::kOutOfRange ? 2 : 1;
   }
+  out_dir.keep();
   eval::print_summary(stdout, eval::summarise(rec, result));
   std::printf("outputs: %s/{estimates.csv, ranges.csv, can.log}\n", out.c_str());
-  return 0;
+  int rc = 0;
+  const size_t epochs = solution_epochs(result);
+  if (epochs == 0) {
+    std::fprintf(stderr, "%s: no solution: 0 of %zu epochs carry a position (%llu ranges used of %zu in uwb.csv)\n",
+                 who, result.estimates.size(), static_cast<unsigned long long>(result.ranges_used), rec.uwb.size());
+    rc = kExitIncomplete;
+  }
+  for (const auto& line : dataset::streams_ended_early(rec)) {
+    std::fprintf(stderr, "%s: %s\n", who, line.c_str());
+    rc = kExitIncomplete;
+  }
+  return rc;
 }
+
+const char* const kReplayUsage =
+    "usage: uwbnav replay DATASET_DIR --out OUT_DIR [--param name=value]... [--cal FILE] [--progress]\n"
+    "  --param NAME=VALUE: overrides the parameter table (uwbnav params); wins over the site file\n"
+    "  --cal FILE: site range calibration (uwbnav calibrate, docs/commissioning.md)\n"
+    "  exit status: 0 solution over complete input, 1 unreadable input or failure (no OUT_DIR left),\n"
+    "  2 usage or parameter error, 3 no solution (0 epochs) or an input stream ended early\n";
 
 }  // namespace
 
@@ -51,22 +73,24 @@ int cmd_replay(int argc, char** argv) {
   Args args(argc, argv, {"--progress"});
   if (!args.error().empty() || args.positional().size() != 1 || !args.has("--out") ||
       !args.unknown({"--out", "--param", "--progress", "--cal"}).empty()) {
-    std::fprintf(stderr,
-                 "usage: uwbnav replay DATASET_DIR --out OUT_DIR [--param name=value]... [--cal FILE] [--progress]\n"
-                 "  --cal FILE: site range calibration (uwbnav calibrate, docs/commissioning.md)\n");
+    std::fprintf(stderr, "%s", kReplayUsage);
+    if (!args.error().empty()) std::fprintf(stderr, "uwbnav replay: %s\n", args.error().c_str());
     return 2;
   }
+  std::vector<std::pair<std::string, float>> checked;
+  if (!parse_param_options(args, "uwbnav replay", &checked)) return 2;
   dataset::Recording rec;
   dataset::ReadReport report;
   if (!ok(dataset::read_recording(args.positional()[0], rec, report))) {
-    std::fprintf(stderr, "uwbnav replay: cannot read recording %s\n", args.positional()[0].c_str());
-    for (const auto& w : report.warnings) std::fprintf(stderr, "  %s\n", w.c_str());
+    std::fprintf(stderr, "uwbnav replay: cannot read recording %s: %s\n", args.positional()[0].c_str(),
+                 report.error.c_str());
+    dataset::print_warnings(report, stderr);
     return 1;
   }
-  for (const auto& w : report.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  dataset::print_warnings(report, stderr);
   if (report.rows_skipped > 0) std::fprintf(stderr, "warning: %zu bad rows skipped\n", report.rows_skipped);
   if (!apply_cal_option(args, rec.site, "uwbnav replay")) return 1;
-  return replay_and_report(rec, args.get("--out"), args);
+  return replay_and_report(rec, args.get("--out"), args, "uwbnav replay");
 }
 
 int cmd_run(int argc, char** argv) {
@@ -76,8 +100,11 @@ int cmd_run(int argc, char** argv) {
       !args.unknown({"--out", "--seed", "--param", "--progress", "--cal"}).empty() ||
       !args.get_u64("--seed", 1, &seed)) {
     std::fprintf(stderr, "usage: uwbnav run [SCENARIO] [--out DIR] [--seed N] [--param name=value]... [--cal FILE]\n");
+    if (!args.error().empty()) std::fprintf(stderr, "uwbnav run: %s\n", args.error().c_str());
     return 2;
   }
+  std::vector<std::pair<std::string, float>> checked;
+  if (!parse_param_options(args, "uwbnav run", &checked)) return 2;
   const std::string scenario = args.positional().empty() ? sim::preset_names().front() : args.positional()[0];
   const std::string out = args.get("--out", "out/run");
   dataset::Recording rec;
@@ -86,15 +113,18 @@ int cmd_run(int argc, char** argv) {
     std::fprintf(stderr, "uwbnav run: %s\n", err.c_str());
     return 1;
   }
+  dataset::OutputDir out_dir;
   const std::string rec_dir = out + "/recording";
-  if (!dataset::make_dirs(rec_dir) || !ok(dataset::write_recording(rec_dir, rec))) {
+  if (!out_dir.create(rec_dir) || !ok(dataset::write_recording(rec_dir, rec))) {
     std::fprintf(stderr, "uwbnav run: cannot write %s\n", rec_dir.c_str());
     return 1;
   }
   std::printf("scenario %s (seed %llu): %zu IMU samples, %zu ranges -> %s\n", scenario.c_str(),
               static_cast<unsigned long long>(seed), rec.imu.size(), rec.uwb.size(), rec_dir.c_str());
   if (!apply_cal_option(args, rec.site, "uwbnav run")) return 1;
-  return replay_and_report(rec, out, args);
+  const int rc = replay_and_report(rec, out, args, "uwbnav run");
+  if (rc != 1 && rc != 2) out_dir.keep();
+  return rc;
 }
 
 }  // namespace uwbnav::cli

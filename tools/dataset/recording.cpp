@@ -3,6 +3,8 @@
 // "file:line: reason" warning each.
 #include "tools/dataset/recording.hpp"
 
+#include <sys/stat.h>
+
 #include <charconv>
 #include <cmath>
 #include <system_error>
@@ -103,7 +105,8 @@ Status read_table(const std::string& dir, const char* file, const csv::Columns& 
   const Status st = csv::read_file(dir + "/" + file, text);
   if (st == Status::kNotFound) {
     if (!required) return Status::kOk;
-    report.error = std::string(file) + ": required file missing in " + dir;
+    report.error = std::string(file) + ": required file missing in " + dir +
+                   " (format v1 needs anchors.csv and uwb.csv; docs/dataset-format.md)";
     return st;
   }
   if (st != Status::kOk) {
@@ -168,6 +171,15 @@ void print_warnings(const ReadReport& report, std::FILE* out) {
 Status read_recording(const std::string& dir, Recording& out, ReadReport& report) {
   out = Recording{};
   out.dir = dir;
+  struct stat dir_stat {};
+  if (::stat(dir.c_str(), &dir_stat) != 0) {
+    report.error = dir + ": no such directory (a recording is a directory of format v1 files)";
+    return Status::kNotFound;
+  }
+  if (!S_ISDIR(dir_stat.st_mode)) {
+    report.error = dir + ": not a directory (a recording is a directory of format v1 files)";
+    return Status::kInvalidArgument;
+  }
   Status st = read_meta(dir, out, report);
   if (st != Status::kOk) return st;
 
@@ -284,6 +296,22 @@ Status read_recording(const std::string& dir, Recording& out, ReadReport& report
                     return true;
                   });
   return st;
+}
+
+std::vector<std::string> streams_ended_early(const Recording& rec) {
+  std::vector<std::string> lines;
+  if (rec.imu.empty() || rec.uwb.empty()) return lines;
+  const uint64_t imu_end = rec.imu.back().t_us;
+  const uint64_t uwb_end = rec.uwb.back().range.t_us;
+  auto line = [&](const char* file, uint64_t end, const char* other, uint64_t other_end) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "%s: ends at t=%.3f s, %.3f s before %s (last %.3f s): input stream ended early",
+                  file, us_to_seconds(end), us_to_seconds(other_end - end), other, us_to_seconds(other_end));
+    lines.emplace_back(buf);
+  };
+  if (imu_end + kStreamEndToleranceUs < uwb_end) line("imu.csv", imu_end, "uwb.csv", uwb_end);
+  if (uwb_end + kStreamEndToleranceUs < imu_end) line("uwb.csv", uwb_end, "imu.csv", imu_end);
+  return lines;
 }
 
 }  // namespace uwbnav::dataset

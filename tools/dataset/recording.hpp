@@ -59,6 +59,13 @@ void print_warnings(const ReadReport& report, std::FILE* out);
 // yields no usable anchor.
 [[nodiscard]] Status read_recording(const std::string& dir, Recording& out, ReadReport& report);
 
+// Input streams that stop early: with both imu.csv and uwb.csv present, a stream
+// whose last sample comes more than kStreamEndToleranceUs before the other's
+// (a truncated file, a sensor that died). One line per such stream, e.g.
+// "imu.csv: ends at t=30.000 s, 29.990 s before uwb.csv (last 59.990 s): input stream ended early".
+constexpr uint64_t kStreamEndToleranceUs = 1000000;
+std::vector<std::string> streams_ended_early(const Recording& rec);
+
 // Writes `rec` as a format v1 directory (creating it). Floats are written with
 // enough digits to round-trip the estimator's input exactly.
 [[nodiscard]] Status write_recording(const std::string& dir, const Recording& rec);

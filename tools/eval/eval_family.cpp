@@ -400,14 +400,7 @@ int run_eval_family(int argc, char** argv) {
   const bool real = args.has("--real");
   ReplayOptions ropt;
   ropt.keep_in_memory = true;
-  for (const std::string& p : args.all("--param")) {
-    std::pair<std::string, float> kv;
-    if (!cli::parse_param_override(p, &kv)) {
-      std::fprintf(stderr, "uwbnav eval family: --param needs name=value, got '%s'\n", p.c_str());
-      return 2;
-    }
-    ropt.params.push_back(kv);
-  }
+  if (!cli::parse_param_options(args, "uwbnav eval family", &ropt.params)) return 2;
   uint64_t jobs64 = std::max(1U, std::thread::hardware_concurrency());
   if (!args.get_u64("--jobs", jobs64, &jobs64) || jobs64 == 0) {
     std::fprintf(stderr, "uwbnav eval family: --jobs needs a positive integer\n");

@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "firmware/app.hpp"
+#include "firmware/param_text.hpp"
 #include "hal/host/candump_log.hpp"
 #include "hal/host/file_param_store.hpp"
 #include "hal/host/lockstep_clock.hpp"
@@ -103,15 +104,12 @@ Status run_replay(const dataset::Recording& rec, const ReplayOptions& options, R
     return Status::kInvalidArgument;
   }
   for (const auto& [name, value] : options.params) {
-    const ParamDef* d = Params::find(name.c_str());
-    if (d == nullptr) {
-      if (error) *error = "unknown parameter '" + name + "'";
-      return Status::kNotFound;
-    }
-    if (!ok(app.set_param(d->index, value))) {
-      if (error) *error = "parameter '" + name + "' out of range [" + std::to_string(d->min) + ", " +
-                          std::to_string(d->max) + "]";
-      return Status::kOutOfRange;
+    const ParamDef* d = nullptr;
+    char why[kParamErrorMax];
+    const Status checked = check_param_value(name.c_str(), value, &d, why, sizeof why);
+    if (!ok(checked) || !ok(app.set_param(d->index, value))) {
+      if (error) *error = std::string("param: ") + why;
+      return ok(checked) ? Status::kInvalidArgument : checked;
     }
   }
 

@@ -372,6 +372,9 @@ int run_eval_report(int argc, char** argv) {
       jobs = static_cast<unsigned>(std::max(1L, std::strtol(argv[++i], nullptr, 10)));
     } else if (a == "--no-figures") {
       figures = false;
+    } else if (a == "--help") {
+      specs.clear();
+      break;
     } else if (a.rfind("--", 0) == 0) {
       std::fprintf(stderr, "uwbnav eval report: unknown option %s\n", a.c_str());
       return 2;
@@ -384,7 +387,8 @@ int run_eval_report(int argc, char** argv) {
                          "  RECORDING: a format v1 directory, or sim:PRESET[:SEED]\n");
     return 2;
   }
-  if (!dataset::make_dirs(out)) {
+  dataset::OutputDir out_dir;  // removed again when no recording could be evaluated
+  if (!out_dir.create(out)) {
     std::fprintf(stderr, "uwbnav eval report: cannot create %s\n", out.c_str());
     return 1;
   }
@@ -460,6 +464,7 @@ int run_eval_report(int argc, char** argv) {
     }
   }
   std::fclose(md);
+  if (static_cast<size_t>(failures) < specs.size()) out_dir.keep();
   const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("eval report: %zu recording(s), %d failed, %.1f s -> %s/results.md\n", specs.size(), failures, el,
               out.c_str());

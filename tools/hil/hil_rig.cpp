@@ -118,6 +118,9 @@ Status run_rig(const dataset::Recording& rec, hal::SocketCanBus& bus, const RigO
   hal::CanFrame frames[can::kImuFrames];
   size_t next = 0;
   const uint64_t wall0_us = monotonic_us();
+  uint64_t next_progress_us = wall0_us + o.progress_every_us;
+  size_t latency_seen = 0;
+  double latency_max_us = 0.0;
   for (;;) {
     const uint64_t now_fw_us = add_signed(monotonic_us(), run.clock_offset_us);
     // Send every sample that is due: a sensor delivers its sample at (not before) its timestamp.
@@ -144,6 +147,17 @@ Status run_rig(const dataset::Recording& rec, hal::SocketCanBus& bus, const RigO
       ++next;
     }
     drain(bus, o, run);
+    if (o.progress != nullptr && monotonic_us() >= next_progress_us) {
+      next_progress_us += o.progress_every_us;
+      const auto& lat = run.monitor->latencies_us();
+      for (; latency_seen < lat.size(); ++latency_seen) latency_max_us = std::max(latency_max_us, lat[latency_seen]);
+      const double total_s = static_cast<double>(end_fw_us - start_fw_us) * 1e-6;
+      const double done_s = std::min(total_s, static_cast<double>(now_fw_us - std::min(now_fw_us, start_fw_us)) * 1e-6);
+      std::fprintf(o.progress, "hil: %5.1f of %.1f s played, %zu solutions received, %llu frames sent, latency max so far %.2f ms\n",
+                   done_s, total_s, run.monitor->solutions().size(), static_cast<unsigned long long>(run.frames_sent),
+                   latency_max_us * 1e-3);
+      std::fflush(o.progress);
+    }
     if (run.link_closed) break;
     if (next >= stream.size() && now_fw_us >= end_fw_us) break;
     if (o.stop != nullptr && *o.stop) {
@@ -216,6 +230,10 @@ HilReport build_report(const dataset::Recording& rec, const RigRun& run, bool lo
   if (run.monitor) {
     const OutputMonitor& m = *run.monitor;
     r.latency_ms = series_stats(scaled(m.latencies_us(), 1e-3));
+    r.latency_hist.assign(kNumLatencyBins, 0);
+    for (double us : m.latencies_us()) {
+      ++r.latency_hist[latency_bin(us > 4.0e9 ? 4000000000U : static_cast<uint32_t>(std::max(0.0, us)))];
+    }
     const std::vector<double> periods_ms = scaled(m.periods_us(), 1e-3);
     r.period_ms = series_stats(periods_ms);
     for (double p : periods_ms) r.period_max_dev_ms = std::max(r.period_max_dev_ms, std::fabs(p - 10.0));
@@ -266,6 +284,19 @@ std::vector<std::pair<std::string, std::string>> report_rows(const HilReport& r)
   std::snprintf(b, sizeof b, "n %zu  mean %.2f  p50 %.2f  p95 %.2f  p99 %.2f  max %.2f ms", r.latency_ms.n,
                 r.latency_ms.mean, r.latency_ms.p50, r.latency_ms.p95, r.latency_ms.p99, r.latency_ms.max);
   add("latency e2e");
+  if (!r.latency_hist.empty()) {
+    std::string h;
+    for (uint32_t i = 0; i < kNumLatencyBins && i < r.latency_hist.size(); ++i) {
+      char bin[48];
+      if (i + 1 < kNumLatencyBins) {
+        std::snprintf(bin, sizeof bin, "%s<=%u:%u", i ? " " : "", kLatencyBinUpperUs[i], r.latency_hist[i]);
+      } else {
+        std::snprintf(bin, sizeof bin, " >%u:%u", kLatencyBinUpperUs[kNumLatencyBins - 2], r.latency_hist[i]);
+      }
+      h += bin;
+    }
+    rows.emplace_back("latency histogram", "solutions per bin [us] " + h);
+  }
   std::snprintf(b, sizeof b, "mean %.3f  std %.3f  min %.2f  max %.2f ms, max |dev from 10 ms| %.2f ms",
                 r.period_ms.mean, r.period_ms.std, r.period_ms.min, r.period_ms.max, r.period_max_dev_ms);
   add("PosXY period");
@@ -285,6 +316,7 @@ std::vector<std::pair<std::string, std::string>> report_rows(const HilReport& r)
     std::snprintf(b, sizeof b, "no UWBNAV_Diag received");
   }
   add("firmware");
+  if (!r.firmware_latency.empty()) rows.emplace_back("firmware cycles", r.firmware_latency);
   std::snprintf(b, sizeof b, "RMSE %.3f m  MAX %.3f m  STD %.3f m  (%zu of %zu epochs)", r.hil.rmse_h_m,
                 r.hil.max_h_m, r.hil.std_h_m, r.hil.epochs, r.hil.epochs_total);
   add("position (HIL)");
@@ -297,6 +329,34 @@ std::vector<std::pair<std::string, std::string>> report_rows(const HilReport& r)
 }
 
 }  // namespace
+
+std::vector<std::string> check_report(const HilReport& r, const HilLimits& limits, int* failures) {
+  std::vector<std::string> lines;
+  auto check = [&](const char* what, double value, double bound, bool pass) {
+    char b[200];
+    std::snprintf(b, sizeof b, "CHECK %s: %s = %.4f %s %.4f", pass ? "passed" : "FAILED", what, value,
+                  pass ? "<=" : "exceeds", bound);
+    lines.emplace_back(b);
+    if (!pass) ++*failures;
+  };
+  if (limits.max_missing >= 0.0) {
+    const double v = static_cast<double>(r.missing) + r.e2e_failures + r.group_mismatches;
+    check("missing + E2E failures + group mismatches", v, limits.max_missing, v <= limits.max_missing);
+  }
+  if (limits.max_latency_ms >= 0.0) {
+    check("latency max [ms]", r.latency_ms.max, limits.max_latency_ms,
+          r.latency_ms.n > 0 && r.latency_ms.max <= limits.max_latency_ms);
+  }
+  if (limits.max_latency_p99_ms >= 0.0) {
+    check("latency p99 [ms]", r.latency_ms.p99, limits.max_latency_p99_ms,
+          r.latency_ms.n > 0 && r.latency_ms.p99 <= limits.max_latency_p99_ms);
+  }
+  if (limits.max_rmse_m >= 0.0) {
+    check("horizontal RMSE [m]", r.hil.rmse_h_m, limits.max_rmse_m,
+          r.hil.epochs > 0 && r.hil.rmse_h_m <= limits.max_rmse_m);
+  }
+  return lines;
+}
 
 void print_report(std::FILE* out, const HilReport& r) {
   std::fprintf(out, "HIL report\n");

@@ -28,6 +28,8 @@ struct RigOptions {
   const volatile bool* stop = nullptr;         // set (e.g. by SIGINT) to end playback early
   hal::CandumpLogWriter* rx_log = nullptr;     // every frame read from the bus
   hal::CandumpLogWriter* tx_log = nullptr;     // every frame the rig sent
+  std::FILE* progress = nullptr;               // a progress line every progress_every_us while playing
+  uint64_t progress_every_us = 5000000;
 };
 
 // What one run produced; the stream and monitor stay alive for the report.
@@ -69,6 +71,7 @@ struct HilReport {
   uint64_t send_late_max_us = 0;
   uint64_t frames_received = 0;
   SeriesStats latency_ms;           // end-to-end latency (docs/hil.md)
+  std::vector<uint32_t> latency_hist;  // end-to-end latency per bin of the firmware's cycle histogram (kLatencyBinUpperUs)
   SeriesStats period_ms;            // PosXY inter-arrival
   double period_max_dev_ms = 0.0;   // max |inter-arrival - 10 ms|
   std::vector<MessageCheck> messages;
@@ -85,7 +88,20 @@ struct HilReport {
   eval::AccuracyStats lockstep;     // same recording, lockstep replay, vs truth
   bool interrupted = false;
   bool link_closed = false;
+  std::string firmware_latency;     // the spawned firmware's own cycle-latency histogram (its exit summary)
 };
+
+// Pass/fail bounds of `uwbnav hil --max-*` (a negative bound: not checked).
+struct HilLimits {
+  double max_missing = -1.0;         // missing + E2E failures + group mismatches
+  double max_latency_ms = -1.0;      // the largest end-to-end latency
+  double max_latency_p99_ms = -1.0;  // the 99th percentile of the end-to-end latency
+  double max_rmse_m = -1.0;          // horizontal RMSE of the received positions
+};
+
+// One line per requested check, "CHECK passed: ..." or "CHECK FAILED: ...",
+// naming the quantity, its value and the bound; *failures counts the failed ones.
+std::vector<std::string> check_report(const HilReport& r, const HilLimits& limits, int* failures);
 
 // Builds the report. lockstep: run the same recording in lockstep for reference.
 HilReport build_report(const dataset::Recording& rec, const RigRun& run, bool lockstep);

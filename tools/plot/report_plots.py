@@ -46,6 +46,58 @@ def shade_periods(ax, periods):
         ax.axvspan(t0, t1, color=color, alpha=0.12, lw=0, label=label)
 
 
+def error_axis_limit(series):
+    """Half-height of the error-over-time axes [m]: the filter's (uwbnav default)
+    largest east/north error plus 15 %, at least 0.05 m, so that baselines with
+    far larger errors (LS-UWB spikes of tens of metres) do not flatten it."""
+    s = series.get("default")
+    if s is None:
+        return None
+    e = np.concatenate([np.abs(s["ex_m"]), np.abs(s["ey_m"])])
+    e = e[np.isfinite(e)]
+    if len(e) == 0:
+        return None
+    return max(0.05, 1.15 * float(np.max(e)))
+
+
+def draw_error_time(d, name, series, periods):
+    """Error over time with NLOS periods and outages shaded (Figs. 8-9), scaled
+    to the filter's error; other methods beyond the axis are clipped at its edge
+    (x markers) and the count of clipped epochs is given in the legend.
+    Returns the y limit used (None: autoscaled)."""
+    lim = error_axis_limit(series)
+    fig, axes = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
+    for ax, col, title in ((axes[0], "ex_m", "east"), (axes[1], "ey_m", "north")):
+        shade_periods(ax, periods)
+        for key, label, ls in METHODS:
+            s = series[key]
+            if s is None or key == "imu_only":
+                continue
+            v = s[col]
+            if lim is None:
+                ax.plot(s["t_s"], v, ls, lw=0.8, label=label)
+                continue
+            out = np.abs(v) > lim
+            n_out = int(np.sum(out))
+            if n_out:
+                label = f"{label} ({n_out} of {len(v)} beyond ±{lim:.2f} m, clipped)"
+            line = ax.plot(s["t_s"], np.clip(v, -lim, lim), ls, lw=0.8, label=label)[0]
+            if n_out:
+                ax.plot(s["t_s"][out], np.sign(v[out]) * lim, "x", ms=4, color=line.get_color())
+        if lim is not None:
+            ax.set_ylim(-1.05 * lim, 1.05 * lim)
+        ax.set_ylabel(f"{title} error [m]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, loc="upper right")
+    axes[1].set_xlabel("t [s]")
+    scale = "" if lim is None else f" (axis scaled to uwbnav default, ±{lim:.2f} m)"
+    fig.suptitle(f"{name}: position error over time{scale}")
+    fig.tight_layout()
+    fig.savefig(os.path.join(d, "error_time.png"), dpi=110)
+    plt.close(fig)
+    return lim
+
+
 def main(d):
     name = os.path.basename(os.path.normpath(d))
     series = {k: read_csv(os.path.join(d, f"series_{k}.csv")) for k, _, _ in METHODS}
@@ -96,23 +148,7 @@ def main(d):
     fig.savefig(os.path.join(d, "cdf_east_north.png"), dpi=110)
     plt.close(fig)
 
-    # Error over time with NLOS periods and outages shaded (Figs. 8-9).
-    fig, axes = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
-    for ax, col, title in ((axes[0], "ex_m", "east"), (axes[1], "ey_m", "north")):
-        shade_periods(ax, periods)
-        for key, label, ls in METHODS:
-            s = series[key]
-            if s is None or key == "imu_only":
-                continue
-            ax.plot(s["t_s"], s[col], ls, lw=0.8, label=label)
-        ax.set_ylabel(f"{title} error [m]")
-        ax.grid(True, alpha=0.3)
-    axes[0].legend(fontsize=8, loc="upper right")
-    axes[1].set_xlabel("t [s]")
-    fig.suptitle(f"{name}: position error over time")
-    fig.tight_layout()
-    fig.savefig(os.path.join(d, "error_time.png"), dpi=110)
-    plt.close(fig)
+    draw_error_time(d, name, series, periods)
 
     # Claimed 2-sigma band over the actual error (default policy).
     s = series["default"]
