@@ -7,7 +7,7 @@ set -euo pipefail
 host_pkgs=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libgtest-dev libgmock-dev libbenchmark-dev
-  libsvm-dev libsvm-tools
+  libsvm-dev libsvm-tools zlib1g-dev
   python3 python3-numpy python3-matplotlib python3-can python3-canmatrix
   can-utils
 )
@@ -15,7 +15,7 @@ cross_pkgs=(
   gcc-arm-none-eabi libstdc++-arm-none-eabi-picolibc picolibc-arm-none-eabi
   qemu-system-arm qemu-user
   g++-aarch64-linux-gnu libc6-dev-arm64-cross
-  googletest libsvm-dev:arm64
+  googletest libsvm-dev:arm64 zlib1g-dev:arm64
 )
 
 pkgs=("${host_pkgs[@]}")

@@ -13,6 +13,7 @@
 
 #include "estimator/nlos/channel.hpp"
 #include "tools/eval/baselines.hpp"
+#include "tools/eval/eval_family.hpp"
 #include "tools/eval/replay.hpp"
 #include "tools/eval/svm_features.hpp"
 #include "tools/eval/svm_train.hpp"
@@ -318,7 +319,7 @@ int run_eval_nlos(int argc, char** argv) {
   std::vector<uint64_t> protocol_seeds = {11, 12};
   std::vector<uint64_t> drive_seeds = {21, 22, 23};
   std::string drive = "parking_nlos";
-  std::string table = "../shared/data/hanyang/hanyang_static_nlos_features.csv";
+  std::string table = find_real_data_dir() + "/hanyang/hanyang_static_nlos_features.csv";
   int folds = 5;
   bool positioning = true;
   bool hour = false;
