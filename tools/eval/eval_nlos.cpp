@@ -267,12 +267,15 @@ void evaluate_table(const std::string& path, int folds, uint64_t seed, size_t ma
     SvmModel model;
     SvmTrainReport rep;
     if (!ok(train_svm_model(sub, opt, model, rep, &err))) {
-      std::printf("| channel SVM: %s |\n", err.c_str());
+      std::printf("| channel SVM, %s: %s |\n", grouped ? "positions held out" : "random folds", err.c_str());
       continue;
     }
     std::vector<int> pred;
-    cross_validate(sub, SvmFeatureSet::kChannel, rep.best_c, rep.best_gamma, folds, grouped, false, seed + 5U, &pred,
-                   nullptr);
+    if (!ok(cross_validate(sub, SvmFeatureSet::kChannel, rep.best_c, rep.best_gamma, folds, grouped, false, seed + 5U,
+                           &pred, nullptr, &err))) {
+      std::printf("| channel SVM, %s: %s |\n", grouped ? "positions held out" : "random folds", err.c_str());
+      continue;
+    }
     Confusion c;
     for (size_t i = 0; i < sub.size(); ++i) c.add(sub[i].label != 0, pred[i] != 0);
     print_confusion_row(grouped ? "channel SVM, positions held out" : "channel SVM, random folds", c);
