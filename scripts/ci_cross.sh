@@ -28,7 +28,7 @@ step() {
   fi
 }
 
-bash scripts/bootstrap.sh || exit 1
+bash scripts/bootstrap.sh cortex-m4f aarch64 || exit 1  # cross toolchains, qemu, arm64 libraries
 host="${UWBNAV_HOST_BUILD:-build/host}"          # host tree of the preceding host run
 a64="${UWBNAV_AARCH64_BUILD:-build/aarch64}"     # binaryDir of the aarch64 preset
 if [[ ! -x "$host/bin/uwbnav" ]]; then

@@ -1,19 +1,16 @@
 #!/usr/bin/env bash
 # Regenerates docs/results.md and docs/results/ (tables, figures) from the code:
 # every method over the simulated scenarios (seeds never used for tuning) and
-# every recording in ../shared/data. Usage: scripts/make_results.sh [build_dir]
+# every real recording shipped in data/ (README there). Usage: scripts/make_results.sh [build_dir]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build="${1:-build/host}"
 uwbnav="$build/bin/uwbnav"
 [[ -x "$uwbnav" ]] || { cmake --preset host >/dev/null && cmake --build --preset host --target uwbnav; }
 recs=(sim:parking_los:201 sim:parking_nlos:202 sim:parking_outages:203 sim:indoor3d:204)
-shared="../shared/data"
-if [[ -d "$shared" ]]; then
-  for d in "$shared"/miluv/*/ "$shared"/hanyang/*/; do [[ -f "$d/uwb.csv" ]] && recs+=("${d%/}"); done
-else
-  echo "make_results: $shared absent; simulated recordings only" >&2
-fi
+data="data"
+for d in "$data"/miluv/*/ "$data"/hanyang/*/; do [[ -f "$d/uwb.csv.gz" || -f "$d/uwb.csv" ]] && recs+=("${d%/}"); done
+[[ ${#recs[@]} -gt 4 ]] || { echo "make_results: no real recording under $data/" >&2; exit 1; }
 rm -rf docs/results
 "$uwbnav" eval report "${recs[@]}" --out docs/results
 # Keep tables and figures; the per-epoch series stay out of the repository.
@@ -30,13 +27,12 @@ find docs/results -name 'series_*.csv' -delete -o -name 'track_*.csv' -delete -o
   echo "first table; recoveries per hour by kind and the honesty figures in the second."
   echo
   "$uwbnav" eval family --seeds reporting --markdown --jobs 2 | sed -e '/^wall time/d'
-  if [[ -d "$shared" ]]; then
-    echo
-    echo "## The same figures on the real recordings in ../shared/data"
-    echo
-    echo "Reproduce: \`uwbnav eval family --real --markdown\`."
-    echo
-    "$uwbnav" eval family --real --markdown | sed -e '/^wall time/d'
-  fi
+  echo
+  echo "## The same figures on the real recordings in data/"
+  echo
+  echo "Reproduce: \`uwbnav eval family --real --markdown\`."
+  echo
+  "$uwbnav" eval family --real --markdown | sed -e '/^wall time/d'
+
 } > docs/results.md
 echo "make_results: wrote docs/results.md"

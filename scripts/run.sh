@@ -4,7 +4,7 @@
 # lot with NLOS), print the result table, write outputs to out/run (or $1).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/bootstrap.sh --host-only
+bash scripts/bootstrap.sh host
 cmake --preset host >/dev/null
 cmake --build --preset host --target uwbnav
 out="${1:-out/run}"

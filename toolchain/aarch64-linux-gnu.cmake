@@ -22,6 +22,9 @@ set(CMAKE_FIND_ROOT_PATH_MODE_INCLUDE ONLY)
 set(CMAKE_FIND_ROOT_PATH_MODE_PACKAGE ONLY)
 # Static libsvm (libsvm-dev:arm64): binaries then need only the cross libc at run time.
 set(LIBSVM_LIBRARY /usr/lib/aarch64-linux-gnu/libsvm.a CACHE FILEPATH "libsvm for aarch64 (static)")
+# zlib (.csv.gz recordings) static as well: qemu-aarch64 -L only sees the sysroot, not /usr/lib/aarch64-linux-gnu.
+set(ZLIB_LIBRARY /usr/lib/aarch64-linux-gnu/libz.a CACHE FILEPATH "zlib for aarch64 (static, zlib1g-dev:arm64)")
+set(ZLIB_INCLUDE_DIR /usr/include CACHE PATH "zlib.h (architecture-independent)")
 
 # Header-only Eigen from the host (architecture independent).
 set(Eigen3_DIR /usr/share/eigen3/cmake CACHE PATH "Eigen3Config.cmake (header-only, from libeigen3-dev)")

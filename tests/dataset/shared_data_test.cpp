@@ -1,5 +1,6 @@
-// Reads every real recording under UWBNAV_SHARED_DIR/data and checks that each
-// data line of each file became one row (none skipped) and the site is parsed.
+// Reads every real recording shipped under data/ (UWBNAV_DATA_DIR, tables
+// gzip-compressed) and checks that each data line of each file became one row
+// (none skipped) and the site is parsed.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,6 +12,7 @@
 
 #include "tests/dataset/dataset_test_util.hpp"
 #include "tools/dataset/recording.hpp"
+#include "tools/dataset/text_source.hpp"
 
 namespace uwbnav::dataset {
 namespace {
@@ -19,7 +21,8 @@ namespace fs = std::filesystem;
 
 // Lines that are neither blank nor comments, minus the header; 0 when absent.
 size_t data_lines(const std::string& path) {
-  const std::string text = testutil::read_text(path);
+  std::string text;
+  if (!ok(read_text_file(path, text))) return 0;
   size_t n = 0;
   size_t pos = 0;
   while (pos < text.size()) {
@@ -34,11 +37,11 @@ size_t data_lines(const std::string& path) {
 
 std::vector<std::string> recordings() {
   std::vector<std::string> dirs;
-  const fs::path data = fs::path(UWBNAV_SHARED_DIR) / "data";
+  const fs::path data = fs::path(UWBNAV_DATA_DIR);
   std::error_code ec;
   if (!fs::is_directory(data, ec)) return dirs;
   for (const auto& e : fs::recursive_directory_iterator(data, ec)) {
-    if (e.is_regular_file() && e.path().filename() == "uwb.csv") dirs.push_back(e.path().parent_path().string());
+    if (e.is_regular_file() && e.path().filename() == "uwb.csv.gz") dirs.push_back(e.path().parent_path().string());
   }
   std::sort(dirs.begin(), dirs.end());
   return dirs;
@@ -46,7 +49,7 @@ std::vector<std::string> recordings() {
 
 TEST(DatasetSharedData, EveryRecordingLoadsWithOneRowPerDataLine) {
   const auto dirs = recordings();
-  if (dirs.empty()) GTEST_SKIP() << "no recordings under " << UWBNAV_SHARED_DIR << "/data (shared folder absent)";
+  ASSERT_EQ(dirs.size(), 5U) << "recordings shipped under " << UWBNAV_DATA_DIR;
   for (const auto& dir : dirs) {
     SCOPED_TRACE(dir);
     Recording rec;
@@ -97,12 +100,11 @@ TEST(DatasetSharedData, HanyangRecordingsHaveAnchors3_5_9_12AndNoImu) {
     EXPECT_GT(repeats, 0U);
     for (const auto& r : rec.uwb) EXPECT_TRUE(std::isfinite(r.range.fp_power_dbm));
   }
-  if (seen == 0) GTEST_SKIP() << "hanyang recordings absent under " << UWBNAV_SHARED_DIR << "/data";
+  EXPECT_EQ(seen, 4U) << "hanyang recordings shipped under " << UWBNAV_DATA_DIR;
 }
 
 TEST(DatasetSharedData, MiluvRecordingHasImuTwoTagsAndAttitudeTruth) {
-  const std::string dir = std::string(UWBNAV_SHARED_DIR) + "/data/miluv/miluv_3drone_ifo001";
-  if (!fs::is_directory(dir)) GTEST_SKIP() << dir << " absent";
+  const std::string dir = std::string(UWBNAV_DATA_DIR) + "/miluv/miluv_3drone_ifo001";
   Recording rec;
   ReadReport rep;
   ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << testutil::dump(rep);

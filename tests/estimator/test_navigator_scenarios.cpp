@@ -174,10 +174,10 @@ TEST(NavigatorScenario, ResetRestartsInitialisation) {
 }
 
 void run_real(const std::string& rel, bool expect_imu) {
-  const std::string dir = std::string(UWBNAV_SHARED_DIR) + "/data/" + rel;
+  const std::string dir = std::string(UWBNAV_DATA_DIR) + "/" + rel;
   dataset::Recording rec;
   dataset::ReadReport rr;
-  if (dataset::read_recording(dir, rec, rr) != Status::kOk) GTEST_SKIP() << "recording not available: " << dir;
+  ASSERT_EQ(dataset::read_recording(dir, rec, rr), Status::kOk) << "shipped recording unreadable: " << rr.error;
   EXPECT_EQ(!rec.imu.empty(), expect_imu);
   const test::RunScore s = test::replay(rec, Params{});
   EXPECT_TRUE(s.all_finite);

@@ -193,8 +193,8 @@ TEST(ValidatorFalseReject, NoRuleRejectsAGoodFrameOfSimulatedRecordings) {
 }
 
 TEST(ValidatorFalseReject, NoRuleRejectsAGoodFrameOfTheRealRecordings) {
-  const std::string root = std::string(UWBNAV_SHARED_DIR) + "/data";
-  ASSERT_TRUE(std::filesystem::is_directory(root + "/hanyang")) << root << ": the shared real recordings are required";
+  const std::string root = UWBNAV_DATA_DIR;
+  ASSERT_TRUE(std::filesystem::is_directory(root + "/hanyang")) << root << ": the shipped real recordings are required";
   size_t seen = 0;
   for (const char* name : {"hanyang/hanyang_los_trajA_case1", "hanyang/hanyang_los_trajA_case2",
                            "hanyang/hanyang_nlos_trajA_case1", "hanyang/hanyang_nlos_trajA_case2",

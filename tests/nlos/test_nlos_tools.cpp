@@ -98,12 +98,8 @@ TEST(SvmExport, GeneratedSourceCarriesNameAndChecksum) {
 }
 
 TEST(SvmFeatures, HanyangTableReadWithPositionGroups) {
-  const std::string path = std::string(UWBNAV_SHARED_DIR) + "/data/hanyang/hanyang_static_nlos_features.csv";
-  if (std::FILE* f = std::fopen(path.c_str(), "r")) {
-    std::fclose(f);
-  } else {
-    GTEST_SKIP() << "shared data not available: " << path;
-  }
+  // Shipped gzip-compressed (data/hanyang/hanyang_static_nlos_features.csv.gz); the reader finds the .gz.
+  const std::string path = std::string(UWBNAV_DATA_DIR) + "/hanyang/hanyang_static_nlos_features.csv";
   std::vector<eval::SvmSample> samples;
   std::string err;
   ASSERT_TRUE(ok(eval::samples_from_table(path, SvmFeatureSet::kChannel, samples, &err))) << err;

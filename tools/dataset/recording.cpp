@@ -11,6 +11,7 @@
 
 #include "tools/dataset/csv.hpp"
 #include "tools/dataset/tables.hpp"
+#include "tools/dataset/text_source.hpp"
 
 namespace uwbnav::dataset {
 
@@ -102,15 +103,16 @@ Status read_table(const std::string& dir, const char* file, const csv::Columns& 
                   ReadReport& report, bool& present, RowFn fn) {
   present = false;
   std::string text;
-  const Status st = csv::read_file(dir + "/" + file, text);
+  std::string why;
+  const Status st = read_text_file(dir + "/" + file, text, &why);
   if (st == Status::kNotFound) {
     if (!required) return Status::kOk;
-    report.error = std::string(file) + ": required file missing in " + dir +
-                   " (format v1 needs anchors.csv and uwb.csv; docs/dataset-format.md)";
+    report.error = std::string(file) + ": required file missing in " + dir + " (nor " + file +
+                   ".gz; format v1 needs anchors.csv and uwb.csv; docs/dataset-format.md)";
     return st;
   }
   if (st != Status::kOk) {
-    report.error = std::string(file) + ": cannot be read";
+    report.error = std::string(file) + ": cannot be read (" + why + ")";
     return st;
   }
   csv::Table table(text, file);

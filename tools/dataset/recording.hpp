@@ -57,6 +57,8 @@ void print_warnings(const ReadReport& report, std::FILE* out);
 // with file and line number; they never reach `out`. Fails (non-kOk) only when
 // a required file is missing/unreadable, a header is wrong, or anchors.csv
 // yields no usable anchor.
+// Each table X.csv may be stored gzip-compressed as X.csv.gz (read when X.csv
+// is absent); a truncated or corrupt .gz fails the read like an unreadable file.
 [[nodiscard]] Status read_recording(const std::string& dir, Recording& out, ReadReport& report);
 
 // Input streams that stop early: with both imu.csv and uwb.csv present, a stream

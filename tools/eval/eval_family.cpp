@@ -21,6 +21,7 @@
 
 #include "firmware/app.hpp"
 #include "tools/cli/args.hpp"
+#include "tools/dataset/text_source.hpp"
 #include "tools/eval/metrics.hpp"
 #include "tools/sim/family.hpp"
 
@@ -56,11 +57,6 @@ double ratio(double num, double den) { return den > 0.0 ? num / den : std::nan("
 bool is_dir(const std::string& p) {
   struct stat st {};
   return ::stat(p.c_str(), &st) == 0 && S_ISDIR(st.st_mode);
-}
-
-bool is_file(const std::string& p) {
-  struct stat st {};
-  return ::stat(p.c_str(), &st) == 0 && S_ISREG(st.st_mode);
 }
 
 std::vector<std::string> subdirs(const std::string& dir) {
@@ -338,7 +334,9 @@ std::string find_real_data_dir() {
 
 std::vector<std::string> find_recordings(const std::string& root) {
   std::vector<std::string> out;
-  const auto is_rec = [](const std::string& d) { return is_file(d + "/uwb.csv") && is_file(d + "/anchors.csv"); };
+  const auto is_rec = [](const std::string& d) {
+    return dataset::text_file_exists(d + "/uwb.csv") && dataset::text_file_exists(d + "/anchors.csv");
+  };
   for (const std::string& a : subdirs(root)) {
     if (is_rec(a)) {
       out.push_back(a);

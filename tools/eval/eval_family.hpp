@@ -89,7 +89,7 @@ bool parse_seed_set(const std::string& text, uint64_t& first, uint64_t& last);
 // Real recordings: <repo>/data first, then <repo>/../shared/data.
 std::string find_real_data_dir();
 
-// Format v1 recordings (directories with uwb.csv) under `root`, two levels deep, sorted.
+// Format v1 recordings (directories with uwb.csv or uwb.csv.gz) under `root`, two levels deep, sorted.
 std::vector<std::string> find_recordings(const std::string& root);
 
 // Prints the two tables (accuracy/availability, honesty/robustness), Markdown or aligned text.

@@ -13,6 +13,7 @@
 
 #include "estimator/nlos/channel.hpp"
 #include "tools/eval/baselines.hpp"
+#include "tools/eval/eval_family.hpp"
 #include "tools/eval/replay.hpp"
 #include "tools/eval/svm_features.hpp"
 #include "tools/eval/svm_train.hpp"
@@ -266,12 +267,15 @@ void evaluate_table(const std::string& path, int folds, uint64_t seed, size_t ma
     SvmModel model;
     SvmTrainReport rep;
     if (!ok(train_svm_model(sub, opt, model, rep, &err))) {
-      std::printf("| channel SVM: %s |\n", err.c_str());
+      std::printf("| channel SVM, %s: %s |\n", grouped ? "positions held out" : "random folds", err.c_str());
       continue;
     }
     std::vector<int> pred;
-    cross_validate(sub, SvmFeatureSet::kChannel, rep.best_c, rep.best_gamma, folds, grouped, false, seed + 5U, &pred,
-                   nullptr);
+    if (!ok(cross_validate(sub, SvmFeatureSet::kChannel, rep.best_c, rep.best_gamma, folds, grouped, false, seed + 5U,
+                           &pred, nullptr, &err))) {
+      std::printf("| channel SVM, %s: %s |\n", grouped ? "positions held out" : "random folds", err.c_str());
+      continue;
+    }
     Confusion c;
     for (size_t i = 0; i < sub.size(); ++i) c.add(sub[i].label != 0, pred[i] != 0);
     print_confusion_row(grouped ? "channel SVM, positions held out" : "channel SVM, random folds", c);
@@ -318,7 +322,7 @@ int run_eval_nlos(int argc, char** argv) {
   std::vector<uint64_t> protocol_seeds = {11, 12};
   std::vector<uint64_t> drive_seeds = {21, 22, 23};
   std::string drive = "parking_nlos";
-  std::string table = "../shared/data/hanyang/hanyang_static_nlos_features.csv";
+  std::string table = find_real_data_dir() + "/hanyang/hanyang_static_nlos_features.csv";
   int folds = 5;
   bool positioning = true;
   bool hour = false;

@@ -3,11 +3,11 @@
 
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
 #include <map>
 #include <sstream>
 #include <utility>
 
+#include "tools/dataset/text_source.hpp"
 #include "tools/eval/metrics.hpp"
 
 namespace uwbnav::eval {
@@ -104,14 +104,14 @@ bool parse_double(const std::string& s, double* out) {
 
 Status samples_from_table(const std::string& path, SvmFeatureSet set, std::vector<SvmSample>& out,
                           std::string* error) {
-  std::ifstream in(path);
-  if (!in) {
-    if (error != nullptr) *error = path + ": cannot open";
+  dataset::TextSource in;
+  if (!ok(in.open(path))) {
+    if (error != nullptr) *error = in.error();
     return Status::kIoError;
   }
   std::string line;
-  if (!std::getline(in, line)) {
-    if (error != nullptr) *error = path + ": empty";
+  if (!in.getline(line)) {
+    if (error != nullptr) *error = in.status() != Status::kOk ? in.error() : path + ": empty";
     return Status::kIoError;
   }
   const std::vector<std::string> header = split_csv(line);
@@ -128,7 +128,7 @@ Status samples_from_table(const std::string& path, SvmFeatureSet set, std::vecto
   const bool has_pos = col.count("height_cm") > 0 && col.count("horiz_dist_m") > 0;
   std::map<std::pair<long, long>, int> groups;
   size_t row_index = 0;
-  while (std::getline(in, line)) {
+  while (in.getline(line)) {
     ++row_index;
     const std::vector<std::string> cells = split_csv(line);
     if (cells.size() < header.size()) continue;
@@ -156,6 +156,10 @@ Status samples_from_table(const std::string& path, SvmFeatureSet set, std::vecto
       }
     }
     out.push_back(s);
+  }
+  if (!ok(in.status())) {
+    if (error != nullptr) *error = in.error();
+    return in.status();
   }
   return Status::kOk;
 }

@@ -41,6 +41,7 @@ double truth_speed_mps(const std::vector<dataset::TruthRow>& truth, uint64_t t_u
 // fp_power_dbm, rx_power_dbm required for kChannel). Rows with missing values
 // are skipped. group = the static position (height_cm, horiz_dist_m) when the
 // table has those columns, so that cross-validation can hold whole positions out.
+// `path` may be stored gzip-compressed as `path`.gz (read when `path` is absent).
 [[nodiscard]] Status samples_from_table(const std::string& path, SvmFeatureSet set, std::vector<SvmSample>& out,
                                         std::string* error);
 

@@ -4,6 +4,7 @@
 #include <svm.h>
 
 #include <algorithm>
+#include <array>
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
@@ -114,32 +115,6 @@ std::vector<double> default_grid(int lo_exp, int hi_exp, int step) {
   std::vector<double> g;
   for (int e = lo_exp; e <= hi_exp; e += step) g.push_back(std::ldexp(1.0, e));
   return g;
-}
-
-// Fold of each sample: stratified random folds, or whole groups per fold.
-std::vector<int> assign_folds(const std::vector<SvmSample>& samples, int folds, bool grouped, uint64_t seed) {
-  std::vector<int> fold(samples.size(), 0);
-  std::mt19937_64 rng(seed);
-  if (grouped) {
-    std::vector<int> groups;
-    for (const auto& s : samples) groups.push_back(s.group);
-    std::sort(groups.begin(), groups.end());
-    groups.erase(std::unique(groups.begin(), groups.end()), groups.end());
-    std::shuffle(groups.begin(), groups.end(), rng);
-    std::map<int, int> group_fold;
-    for (size_t i = 0; i < groups.size(); ++i) group_fold[groups[i]] = static_cast<int>(i % static_cast<size_t>(folds));
-    for (size_t i = 0; i < samples.size(); ++i) fold[i] = group_fold[samples[i].group];
-    return fold;
-  }
-  for (int label = 0; label <= 1; ++label) {
-    std::vector<size_t> idx;
-    for (size_t i = 0; i < samples.size(); ++i) {
-      if (samples[i].label == label) idx.push_back(i);
-    }
-    std::shuffle(idx.begin(), idx.end(), rng);
-    for (size_t k = 0; k < idx.size(); ++k) fold[idx[k]] = static_cast<int>(k % static_cast<size_t>(folds));
-  }
-  return fold;
 }
 
 std::string format_float(float v) {
@@ -337,13 +312,121 @@ void fit_scaling(const std::vector<SvmSample>& train, SvmFeatureSet set, SvmMode
   }
 }
 
-void cross_validate(const std::vector<SvmSample>& samples, SvmFeatureSet set, double c, double gamma, int folds,
+namespace {
+
+const char* class_name(int label) { return label != 0 ? "NLOS" : "LOS"; }
+
+// Whole groups to folds, class-stratified: groups are taken NLOS-only first,
+// then LOS-only, then mixed (each kind in seeded random order); each goes to
+// the fold that still lacks a class the group brings, else to the fold with
+// the fewest samples (lowest index on ties).
+void assign_grouped(const std::vector<SvmSample>& samples, int folds, std::mt19937_64& rng, std::vector<int>& fold) {
+  std::map<int, std::array<size_t, 2>> count;  // group -> samples per label
+  for (const auto& s : samples) ++count[s.group][s.label != 0 ? 1 : 0];
+  std::vector<int> kinds[3];  // 0: NLOS-only, 1: LOS-only, 2: mixed
+  for (const auto& [g, n] : count) kinds[n[0] == 0 ? 0 : (n[1] == 0 ? 1 : 2)].push_back(g);
+  const size_t k = static_cast<size_t>(folds);
+  std::vector<std::array<bool, 2>> has(k, {false, false});
+  std::vector<size_t> size(k, 0);
+  std::map<int, int> group_fold;
+  for (auto& list : kinds) {
+    std::shuffle(list.begin(), list.end(), rng);
+    for (int g : list) {
+      const auto& n = count[g];
+      size_t best = 0;
+      bool best_fills = false;
+      for (size_t f = 0; f < k; ++f) {
+        const bool fills = (n[0] > 0 && !has[f][0]) || (n[1] > 0 && !has[f][1]);
+        if (f == 0 || (fills && !best_fills) || (fills == best_fills && size[f] < size[best])) {
+          best = f;
+          best_fills = fills;
+        }
+      }
+      group_fold[g] = static_cast<int>(best);
+      has[best][0] = has[best][0] || n[0] > 0;
+      has[best][1] = has[best][1] || n[1] > 0;
+      size[best] += n[0] + n[1];
+    }
+  }
+  for (size_t i = 0; i < samples.size(); ++i) fold[i] = group_fold[samples[i].group];
+}
+
+}  // namespace
+
+Status assign_folds(const std::vector<SvmSample>& samples, int folds, bool grouped, uint64_t seed,
+                    std::vector<int>& fold, std::string* error) {
+  fold.assign(samples.size(), 0);
+  if (folds < 2) {
+    if (error != nullptr) *error = "cross-validation needs at least 2 folds, got " + std::to_string(folds);
+    return Status::kInvalidArgument;
+  }
+  std::mt19937_64 rng(seed);
+  if (grouped) {
+    assign_grouped(samples, folds, rng, fold);
+  } else {
+    for (int label = 0; label <= 1; ++label) {
+      std::vector<size_t> idx;
+      for (size_t i = 0; i < samples.size(); ++i) {
+        if (samples[i].label == label) idx.push_back(i);
+      }
+      std::shuffle(idx.begin(), idx.end(), rng);
+      for (size_t k = 0; k < idx.size(); ++k) fold[idx[k]] = static_cast<int>(k % static_cast<size_t>(folds));
+    }
+  }
+  // Every fold must hold out both classes and train on both.
+  std::vector<std::array<size_t, 2>> held(static_cast<size_t>(folds), {0, 0});
+  std::array<size_t, 2> total = {0, 0};
+  std::map<int, std::array<size_t, 2>> groups;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const int c = samples[i].label != 0 ? 1 : 0;
+    ++held[static_cast<size_t>(fold[i])][static_cast<size_t>(c)];
+    ++total[static_cast<size_t>(c)];
+    ++groups[samples[i].group][static_cast<size_t>(c)];
+  }
+  for (int k = 0; k < folds; ++k) {
+    const auto& h = held[static_cast<size_t>(k)];
+    for (int c = 0; c <= 1; ++c) {
+      const bool test_lacks = h[static_cast<size_t>(c)] == 0;
+      const bool train_lacks = total[static_cast<size_t>(c)] == h[static_cast<size_t>(c)];
+      if (!test_lacks && !train_lacks) continue;
+      if (error != nullptr) {
+        std::string why = std::string(grouped ? "grouped" : "stratified") + " cross-validation refused: fold " +
+                          std::to_string(k + 1) + " of " + std::to_string(folds) + " would " +
+                          (test_lacks ? std::string("hold out no ") + class_name(c) + " sample"
+                                      : std::string("train on no ") + class_name(c) + " sample");
+        if (grouped) {
+          size_t only[2] = {0, 0};
+          size_t mixed = 0;
+          for (const auto& [g, n] : groups) {
+            if (n[0] > 0 && n[1] > 0) {
+              ++mixed;
+            } else {
+              ++only[n[1] > 0 ? 1 : 0];
+            }
+          }
+          why += " (" + std::to_string(groups.size()) + " groups: " + std::to_string(only[1]) + " NLOS-only, " +
+                 std::to_string(only[0]) + " LOS-only, " + std::to_string(mixed) +
+                 " mixed; every fold needs a group with each class: use fewer folds or random folds)";
+        } else {
+          why += " (" + std::to_string(total[1]) + " NLOS, " + std::to_string(total[0]) + " LOS samples)";
+        }
+        *error = why;
+      }
+      return Status::kInvalidArgument;
+    }
+  }
+  return Status::kOk;
+}
+
+Status cross_validate(const std::vector<SvmSample>& samples, SvmFeatureSet set, double c, double gamma, int folds,
                     bool grouped, bool probability, uint64_t seed, std::vector<int>* predicted,
-                    std::vector<double>* p_nlos) {
+                      std::vector<double>* p_nlos, std::string* error) {
   svm_set_print_string_function(quiet_print);
-  const std::vector<int> fold = assign_folds(samples, folds, grouped, seed);
   if (predicted != nullptr) predicted->assign(samples.size(), 0);
   if (p_nlos != nullptr) p_nlos->assign(samples.size(), std::nan(""));
+  std::vector<int> fold;
+  const Status fs = assign_folds(samples, folds, grouped, seed, fold, error);
+  if (!ok(fs)) return fs;
   for (int k = 0; k < folds; ++k) {
     std::vector<SvmSample> train;
     std::vector<size_t> test;
@@ -384,6 +467,7 @@ void cross_validate(const std::vector<SvmSample>& samples, SvmFeatureSet set, do
     }
     svm_free_and_destroy_model(&lm);
   }
+  return Status::kOk;
 }
 
 // Keeps one grid point of the C/gamma search in the report and tracks the best
@@ -509,7 +593,9 @@ Status train_svm_model(const std::vector<SvmSample>& samples, const SvmTrainOpti
       size_t correct = 0;
       if (options.grouped_cv) {
         std::vector<int> pred;
-        cross_validate(grid_set, options.set, c, g, options.folds, true, false, options.seed, &pred, nullptr);
+        const Status cs =
+            cross_validate(grid_set, options.set, c, g, options.folds, true, false, options.seed, &pred, nullptr, error);
+        if (!ok(cs)) return cs;
         for (size_t k = 0; k < grid_set.size(); ++k) correct += pred[k] == grid_set[k].label ? 1U : 0U;
       } else {
         SvmModel grid_scaling;

@@ -55,11 +55,23 @@ void svm_scale_double(const SvmModel& scaling, const float* raw, double* scaled)
 // Scaling (min/max of `train` -> [-1, 1]) into a model (only scale_min/max/num_features/feature_set set).
 void fit_scaling(const std::vector<SvmSample>& train, SvmFeatureSet set, SvmModel& scaling);
 
+// Fold (0..folds-1) of each sample, deterministic in `seed`. Random folds are
+// stratified by label. Grouped folds keep each SvmSample::group whole and are
+// class-stratified: groups holding one class only are spread first so that
+// every fold holds out both classes where the groups allow it. kInvalidArgument
+// (and `error` naming the fold, e.g. "fold 4 of 5 would hold out no NLOS
+// sample", with the group counts) when a fold would still hold out, or train
+// on, one class only.
+[[nodiscard]] Status assign_folds(const std::vector<SvmSample>& samples, int folds, bool grouped, uint64_t seed,
+                                  std::vector<int>& fold, std::string* error);
+
 // k-fold cross-validated predictions (label per sample, probability of NLOS when
 // `probability`) for fixed C, gamma; scaling fitted on each training fold.
-void cross_validate(const std::vector<SvmSample>& samples, SvmFeatureSet set, double c, double gamma, int folds,
-                    bool grouped, bool probability, uint64_t seed, std::vector<int>* predicted,
-                    std::vector<double>* p_nlos);
+// Refuses (assign_folds' status and error) when a fold would hold one class only.
+[[nodiscard]] Status cross_validate(const std::vector<SvmSample>& samples, SvmFeatureSet set, double c, double gamma,
+                                    int folds, bool grouped, bool probability, uint64_t seed,
+                                    std::vector<int>* predicted, std::vector<double>* p_nlos,
+                                    std::string* error = nullptr);
 
 // Trains one model under the support-vector capacity of the embedded evaluator.
 // Capacity rule: training sets are stratified subsamples of at most

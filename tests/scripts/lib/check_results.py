@@ -35,7 +35,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--uwbnav", required=True)
     ap.add_argument("--docs", required=True)
-    ap.add_argument("--shared", required=True)
+    ap.add_argument("--data", required=True, help="data/ folder of the repository (real recordings)")
     ap.add_argument("--work", required=True)
     a = ap.parse_args()
     checked = 0
@@ -43,9 +43,9 @@ def main():
     for spec, name in SPECS:
         committed = os.path.join(a.docs, name, "tables.csv")
         if not spec.startswith("sim:"):
-            src = os.path.join(a.shared, spec)
+            src = os.path.join(a.data, spec)
             if not os.path.isdir(src):
-                print(f"skip {name}: {src} absent")
+                failures.append(f"{name}: {src} absent (the real recordings ship in data/)")
                 continue
             spec = src
         if not os.path.exists(committed):

@@ -1,0 +1,76 @@
+#!/usr/bin/env bash
+# Coverage-guided fuzzing (libFuzzer + ASan + UBSan) of every input parser the
+# firmware and tools take from outside: builds the `fuzz` preset, runs each
+# target on its committed seeds (tests/fuzz/corpus/<target>) plus a working
+# corpus in build/fuzz/corpus/<target>, prints executions and crashes per
+# target (docs/hardening.md) and fails when any target crashed.
+# Usage: scripts/fuzz.sh [--ci | --seconds N] [TARGET...]
+#   --ci         25 s per target (CI budget: ~2 min for the five targets)
+#   --seconds N  N seconds per target (long runs on demand; default 300)
+# Crash inputs land in build/fuzz/artifacts/<target>-crash-*; replay one with
+#   build/fuzz/fuzz/<target> FILE
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=300
+targets=()
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --ci) seconds=25 ;;
+    --seconds) seconds="$2"; shift ;;
+    -h | --help) sed -n 2,12p "$0"; exit 0 ;;
+    *) targets+=("$1") ;;
+  esac
+  shift
+done
+all=(fuzz_recording fuzz_can_decoder fuzz_console fuzz_param_blob fuzz_sequence)
+[[ ${#targets[@]} -gt 0 ]] || targets=("${all[@]}")
+
+bash scripts/bootstrap.sh fuzz
+cmake --preset fuzz >/dev/null
+cmake --build --preset fuzz
+bin=build/fuzz/fuzz
+seeds=tests/fuzz/corpus
+mkdir -p build/fuzz/artifacts build/fuzz/tmp
+export TMPDIR="$PWD/build/fuzz/tmp"  # fuzz_recording writes its recording files here
+
+max_len() {
+  case "$1" in
+    fuzz_sequence) echo 32768 ;;
+    fuzz_recording) echo 8192 ;;
+    fuzz_can_decoder) echo 4096 ;;
+    fuzz_console) echo 2048 ;;
+    *) echo 1024 ;;
+  esac
+}
+
+failed=()
+rows=()
+for t in "${targets[@]}"; do
+  work="build/fuzz/corpus/$t"
+  mkdir -p "$work"
+  log="build/fuzz/$t.log"
+  echo "fuzz: $t for ${seconds} s"
+  rc=0
+  # One process; a crash, leak, sanitizer report or 10 s slow input stops it.
+  "$bin/$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len="$(max_len "$t")" \
+    -print_final_stats=1 -artifact_prefix="build/fuzz/artifacts/$t-" "$work" "$seeds/$t" >"$log" 2>&1 || rc=$?
+  execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
+  rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)
+  cov=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | cut -d' ' -f2)
+  crashes=0
+  if [[ $rc -ne 0 ]]; then
+    crashes=1
+    failed+=("$t")
+    grep -m3 -E "ERROR|runtime error|fuzz_sequence:|deadly signal|Test unit written" "$log" || true
+  fi
+  rows+=("$(printf '| %-17s | %5s | %11s | %7s | %6s | %7s |' "$t" "$seconds" "${execs:-?}" "${rate:-?}" "${cov:-?}" "$crashes")")
+done
+
+echo
+echo "| target            | s     | executions  | exec/s  | cov    | crashes |"
+echo "|-------------------|-------|-------------|---------|--------|---------|"
+printf '%s\n' "${rows[@]}"
+if [[ ${#failed[@]} -gt 0 ]]; then
+  echo "fuzz: crashed: ${failed[*]} (inputs in build/fuzz/artifacts/, logs build/fuzz/<target>.log)"
+  exit 1
+fi

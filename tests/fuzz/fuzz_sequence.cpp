@@ -1,0 +1,152 @@
+// libFuzzer target: arbitrary IMU/UWB sample sequences through the firmware
+// (App::tick: InputValidator, then the estimator). Whenever the output status
+// says valid, position, velocity, attitude and claimed sigmas must be finite
+// and bounded; anything else aborts (a finding).
+// Input: 1 header byte (bit 0 has IMU, bit 1 air platform), then records:
+// 1 tag byte (bit 0 UWB else IMU, bit 1 raw float bits + signed time step,
+// bits 2-7 time step [ms]) and its payload (docs/hardening.md).
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+
+#include "firmware/app.hpp"
+#include "tests/fuzz/fuzz_board.hpp"
+
+namespace {
+
+using uwbnav::fuzz::ByteReader;
+
+constexpr uint64_t kStartUs = 1000000;
+constexpr size_t kMaxTicks = 600;       // 6 s of loop per input at most (executions per second)
+constexpr double kMaxPosM = 1e4;        // 10 km from the 30 m anchor square
+constexpr double kMaxVelMps = 1e3;
+constexpr double kMaxSigmaM = 1e6;
+
+[[noreturn]] void finding(const char* what, const uwbnav::NavOutput& o) {
+  std::fprintf(stderr, "fuzz_sequence: %s at t_us=%llu status=%s mode=%d pos=(%g,%g,%g) vel=(%g,%g,%g) q=(%g,%g,%g,%g) sigma=(%g,%g,%g)\n",
+               what, static_cast<unsigned long long>(o.t_us), uwbnav::nav_status_name(o.status),
+               static_cast<int>(o.mode), static_cast<double>(o.pos_nav_m.x), static_cast<double>(o.pos_nav_m.y),
+               static_cast<double>(o.pos_nav_m.z), static_cast<double>(o.vel_nav_mps.x),
+               static_cast<double>(o.vel_nav_mps.y), static_cast<double>(o.vel_nav_mps.z),
+               static_cast<double>(o.q_nav_body[0]), static_cast<double>(o.q_nav_body[1]),
+               static_cast<double>(o.q_nav_body[2]), static_cast<double>(o.q_nav_body[3]),
+               static_cast<double>(o.pos_sigma_m.x), static_cast<double>(o.pos_sigma_m.y),
+               static_cast<double>(o.pos_sigma_m.z));
+  std::abort();
+}
+
+bool finite_within(const uwbnav::Vec3f& v, double bound) {
+  const auto in = [bound](float c) { return std::isfinite(c) && std::fabs(static_cast<double>(c)) <= bound; };
+  return in(v.x) && in(v.y) && in(v.z);
+}
+
+void check_output(const uwbnav::NavOutput& o) {
+  if (o.status != uwbnav::NavStatus::kValid) return;
+  if (!finite_within(o.pos_nav_m, kMaxPosM)) finding("valid output with position not finite or beyond 10 km", o);
+  if (!finite_within(o.vel_nav_mps, kMaxVelMps)) finding("valid output with velocity not finite or beyond 1 km/s", o);
+  if (!finite_within(o.pos_sigma_m, kMaxSigmaM) || o.pos_sigma_m.x < 0.0F || o.pos_sigma_m.y < 0.0F ||
+      o.pos_sigma_m.z < 0.0F) {
+    finding("valid output with position sigma not finite, negative or beyond 1000 km", o);
+  }
+  if (!finite_within(o.vel_sigma_mps, kMaxSigmaM)) finding("valid output with velocity sigma not finite", o);
+  double n2 = 0.0;
+  for (float q : o.q_nav_body) {
+    if (!std::isfinite(q)) finding("valid output with attitude not finite", o);
+    n2 += static_cast<double>(q) * static_cast<double>(q);
+  }
+  if (std::fabs(std::sqrt(n2) - 1.0) > 1e-3) finding("valid output with attitude quaternion not unit", o);
+  if (!std::isfinite(o.heading_rad)) finding("valid output with heading not finite", o);
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  using namespace uwbnav;
+  ByteReader in(data, size);
+  const uint8_t header = in.u8();
+  const SiteConfig site = fuzz::square_site((header & 1U) != 0, (header & 2U) != 0 ? Platform::kAir : Platform::kGround);
+
+  fuzz::VectorImuSource imu;
+  fuzz::VectorUwbSource uwb;
+  int64_t t_us = static_cast<int64_t>(kStartUs);
+  while (in.left() > 0 && imu.samples.size() + uwb.ranges.size() < 4096) {
+    const uint8_t tag = in.u8();
+    const bool raw = (tag & 2U) != 0;
+    int64_t dt_ms = tag >> 2;
+    if (raw) dt_ms = static_cast<int8_t>(in.u8());
+    t_us += dt_ms * 1000;
+    if (t_us < 0) t_us = 0;
+    const auto t = static_cast<uint64_t>(t_us);
+    if ((tag & 1U) == 0) {
+      ImuSample s;
+      s.t_us = t;
+      if (raw) {
+        s.accel_body_mps2 = Vec3f{in.f32_bits(), in.f32_bits(), in.f32_bits()};
+        s.gyro_body_radps = Vec3f{in.f32_bits(), in.f32_bits(), in.f32_bits()};
+      } else {
+        const auto a = [&] { return static_cast<float>(static_cast<int16_t>(in.u16())) / 2000.0F; };
+        const auto g = [&] { return static_cast<float>(static_cast<int16_t>(in.u16())) / 20000.0F; };
+        const float ax = a();
+        const float ay = a();
+        const float az = 9.80665F + a();
+        s.accel_body_mps2 = Vec3f{ax, ay, az};
+        const float gx = g();
+        const float gy = g();
+        const float gz = g();
+        s.gyro_body_radps = Vec3f{gx, gy, gz};
+      }
+      imu.samples.push_back(s);
+    } else {
+      UwbRange r;
+      r.t_us = t;
+      const uint8_t who = in.u8();
+      r.anchor_id = static_cast<uint16_t>(who % 6U);  // 1..4 known, 0 and 5 unknown
+      r.tag_id = static_cast<uint8_t>((who >> 3) & 1U);  // 1 unknown
+      if (raw) {
+        r.range_m = in.f32_bits();
+        r.fp_power_dbm = in.f32_bits();
+        r.rx_power_dbm = in.f32_bits();
+      } else {
+        r.range_m = static_cast<float>(in.u16()) * 0.001F;
+        const uint8_t fp = in.u8();
+        const uint8_t rx = in.u8();
+        r.fp_power_dbm = fp == 0 ? kNaNf : -static_cast<float>(fp) * 0.5F;
+        r.rx_power_dbm = rx == 0 ? kNaNf : -static_cast<float>(rx) * 0.5F;
+      }
+      uwb.ranges.push_back(r);
+    }
+  }
+
+  fuzz::SinkCanBus can;
+  fuzz::StringSerial serial;
+  fuzz::StepClock clock;
+  fuzz::BlobParamStore store;
+  hal::Board board{imu, uwb, can, serial, clock, store, site};
+  auto app = std::make_unique<App>(board);
+  if (!ok(app->init())) return 0;
+  uint64_t last_t = kStartUs;
+  for (const auto& s : imu.samples) last_t = s.t_us > last_t ? s.t_us : last_t;
+  for (const auto& r : uwb.ranges) last_t = r.t_us > last_t ? r.t_us : last_t;
+  uint64_t now = (kStartUs / kCyclePeriodUs) * kCyclePeriodUs;
+  size_t valid = 0;
+  for (size_t tick = 0; tick < kMaxTicks && now <= last_t + 200000; ++tick, now += kCyclePeriodUs) {
+    clock.sleep_until_us(now);
+    app->tick(now);
+    check_output(app->last_output());
+    valid += app->last_output().status == NavStatus::kValid ? 1U : 0U;
+  }
+  // UWBNAV_FUZZ_VERBOSE=1 with an input file: shows that the checks had valid outputs to check.
+  static const bool verbose = std::getenv("UWBNAV_FUZZ_VERBOSE") != nullptr;
+  if (verbose) {
+    std::fprintf(stderr, "fuzz_sequence: %zu valid outputs; %zu ranges, %zu IMU samples; last status %s mode %d\n",
+                 valid, uwb.ranges.size(), imu.samples.size(), nav_status_name(app->last_output().status),
+                 static_cast<int>(app->last_output().mode));
+    const auto& st = app->stats();
+    std::fprintf(stderr, "fuzz_sequence: imu accepted %u rejected %u, uwb accepted %u rejected %u\n",
+                 st.imu.accepted, st.imu.rejected_total(), st.uwb.accepted, st.uwb.rejected_total());
+  }
+  return 0;
+}

@@ -1,0 +1,136 @@
+// Writes the seed corpora of the fuzz targets that need well-formed binary
+// input (valid E2E-protected CAN frames, parameter blobs with a good CRC, a
+// plausible IMU/UWB sequence): `fuzz_make_seeds CORPUS_DIR`. The text seeds
+// (recording files, console lines) come from make_seeds.py.
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "estimator/params.hpp"
+#include "firmware/can/sensor_decoder.hpp"
+#include "firmware/param_blob.hpp"
+
+namespace {
+
+using Bytes = std::vector<uint8_t>;
+
+bool write(const std::string& path, const Bytes& b) {
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  if (f == nullptr) return false;
+  const bool good = std::fwrite(b.data(), 1, b.size(), f) == b.size();
+  return std::fclose(f) == 0 && good;
+}
+
+void u16(Bytes& b, int v) {
+  const auto u = static_cast<uint16_t>(static_cast<int16_t>(v));
+  b.push_back(static_cast<uint8_t>(u & 0xFFU));
+  b.push_back(static_cast<uint8_t>(u >> 8));
+}
+
+// fuzz_can_decoder records: selector, len, flags, dt [ms], payload.
+void frame(Bytes& b, const uwbnav::hal::CanFrame& f, uint8_t dt_ms) {
+  static constexpr uint32_t kIds[] = {0x0A0, 0x0A1, 0x0A2, 0x0B0, 0x0B1, 0x100, 0x105};
+  uint8_t sel = 0;
+  for (uint8_t i = 0; i < 7; ++i) {
+    if (kIds[i] == f.id) sel = i;
+  }
+  b.push_back(sel);
+  b.push_back(f.len);
+  b.push_back(f.flags);
+  b.push_back(dt_ms);
+  b.insert(b.end(), f.data, f.data + f.len);
+}
+
+Bytes can_seed(size_t n) {
+  using namespace uwbnav;
+  can::CanSensorEncoder enc;
+  Bytes b;
+  for (size_t i = 0; i < n; ++i) {
+    ImuSample s;
+    s.t_us = 1000000 + i * 4000;
+    s.accel_body_mps2 = Vec3f{0.1F, -0.05F, 9.81F};
+    s.gyro_body_radps = Vec3f{0.001F, 0.0F, 0.02F};
+    hal::CanFrame imu[can::kImuFrames];
+    (void)enc.encode_imu(s, imu);
+    for (const auto& f : imu) frame(b, f, 0);
+    if (i % 4 == 0) {
+      UwbRange r;
+      r.t_us = s.t_us;
+      r.anchor_id = static_cast<uint16_t>(1 + i % 4);
+      r.range_m = 12.5F + 0.01F * static_cast<float>(i);
+      r.fp_power_dbm = -82.0F;
+      r.rx_power_dbm = -79.5F;
+      hal::CanFrame uwb[can::kUwbFrames];
+      (void)enc.encode_uwb(r, uwb);
+      for (const auto& f : uwb) frame(b, f, 1);
+    }
+  }
+  return b;
+}
+
+// fuzz_sequence: a vehicle in the 30 m anchor square driving along +x at
+// `speed_mps` from (5, 15, 0) (heading 0, so an IMU at constant velocity reads
+// gravity only), IMU every 10 ms, a range every 25 ms (anchors 1..4 in turn).
+// Moving, the filter acquires its heading and reaches status valid.
+Bytes sequence_seed(bool with_imu, double seconds, double speed_mps) {
+  Bytes b;
+  b.push_back(with_imu ? 1 : 0);
+  const double ax[4] = {0, 30, 30, 0};
+  const double ay[4] = {0, 0, 30, 30};
+  const int steps = static_cast<int>(seconds * 1000.0);
+  int since = 0;
+  int anchor = 0;
+  for (int ms = 0; ms < steps; ++ms) {
+    ++since;
+    if (with_imu && ms % 10 == 0) {
+      b.push_back(static_cast<uint8_t>(since << 2));  // IMU, step `since` ms
+      since = 0;
+      u16(b, 0);
+      u16(b, 0);
+      u16(b, 0);  // az = 9.80665
+      u16(b, 0);
+      u16(b, 0);
+      u16(b, 0);
+    }
+    if (ms % 25 == 0) {
+      b.push_back(static_cast<uint8_t>((since << 2) | 1));
+      since = 0;
+      b.push_back(static_cast<uint8_t>(anchor + 1));
+      const double x = 5.0 + speed_mps * ms * 1e-3;
+      const double r = std::sqrt((x - ax[anchor]) * (x - ax[anchor]) + (15 - ay[anchor]) * (15 - ay[anchor]) + 1.0);
+      u16(b, static_cast<int>(std::lround(r * 1000.0)));  // < 32.7 m: fits the signed 16-bit writer
+      b.push_back(164);  // fp -82 dBm
+      b.push_back(159);  // rx -79.5 dBm
+      anchor = (anchor + 1) % 4;
+    }
+  }
+  return b;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace uwbnav;
+  if (argc != 2) {
+    std::fprintf(stderr, "usage: fuzz_make_seeds CORPUS_DIR\n");
+    return 2;
+  }
+  const std::string dir = argv[1];
+  bool good = write(dir + "/fuzz_can_decoder/imu_uwb_valid", can_seed(24));
+  Params p;
+  uint8_t blob[kParamBlobMaxBytes];
+  size_t n = param_blob_write(p, blob, sizeof blob);
+  good = good && write(dir + "/fuzz_param_blob/defaults", Bytes(blob, blob + n));
+  if (!ok(p.set(kParamDefs[0].index, kParamDefs[0].max))) return 1;
+  n = param_blob_write(p, blob, sizeof blob);
+  good = good && write(dir + "/fuzz_param_blob/first_at_max", Bytes(blob, blob + n));
+  good = good && write(dir + "/fuzz_sequence/static_imu_uwb", sequence_seed(true, 6.0, 2.0));
+  good = good && write(dir + "/fuzz_sequence/static_uwb_only", sequence_seed(false, 3.0, 0.0));
+  if (!good) {
+    std::fprintf(stderr, "fuzz_make_seeds: cannot write under %s (create the target folders)\n", dir.c_str());
+    return 1;
+  }
+  return 0;
+}
