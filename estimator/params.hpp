@@ -47,9 +47,21 @@ struct ParamDef {
 
 constexpr size_t kNumParams = static_cast<size_t>(ParamId::kCount);
 
+// Boards short of flash build without the description texts (UWBNAV_PARAM_DOCS=0,
+// e.g. hal/mps2): `doc` is then empty and the console leaves it out.
+#ifndef UWBNAV_PARAM_DOCS
+#define UWBNAV_PARAM_DOCS 1
+#endif
+#if UWBNAV_PARAM_DOCS
+#define UWBNAV_PARAM_DOC(text) text
+#else
+#define UWBNAV_PARAM_DOC(text) ""
+#endif
+
 // inline: one copy in the image, not one per translation unit that reads it.
 inline constexpr ParamDef kParamDefs[kNumParams] = {
-#define X(e, id, name, unit, kind, def, lo, hi, doc) {ParamId::e, id, name, unit, ParamKind::kind, def, lo, hi, doc},
+#define X(e, id, name, unit, kind, def, lo, hi, doc) \
+  {ParamId::e, id, name, unit, ParamKind::kind, def, lo, hi, UWBNAV_PARAM_DOC(doc)},
 #include "estimator/params_table.inc"
 #undef X
 };

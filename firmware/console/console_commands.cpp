@@ -369,7 +369,7 @@ void Console::add_param(size_t index, bool with_doc) {
   add_general(" min=", p.min);
   add_general(" max=", p.max);
   add(" unit=%s", p.unit);
-  if (with_doc) add(" doc=\"%s\"", p.doc);
+  if (with_doc && p.doc[0] != '\0') add(" doc=\"%s\"", p.doc);
 }
 
 // Reply of param set / param reset NAME: "param name=.. value=.. old=..".
