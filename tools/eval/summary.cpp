@@ -3,6 +3,8 @@
 
 #include "tools/eval/baselines.hpp"
 
+#include <vector>
+
 namespace uwbnav::eval {
 
 RunSummary summarise(const dataset::Recording& rec, const ReplayResult& result) {
@@ -26,6 +28,14 @@ RunSummary summarise(const dataset::Recording& rec, const ReplayResult& result) 
       if (truth_at(rec.truth, e.t_us, p)) ++total;
     }
     s.filter = accuracy(compare_with_truth(result.estimates, rec.truth), total);
+    // The same epochs split by the mode that published them (availability: share of all epochs).
+    std::vector<dataset::EstimateRow> by_mode[2];
+    for (const auto& e : result.estimates) {
+      if (e.mode == static_cast<int>(NavMode::kNone)) continue;
+      by_mode[e.mode == static_cast<int>(NavMode::kInertial) ? 0 : 1].push_back(e);
+    }
+    s.inertial = accuracy(compare_with_truth(by_mode[0], rec.truth), total);
+    s.fallback = accuracy(compare_with_truth(by_mode[1], rec.truth), total);
     const auto ls = ls_baseline(rec, LsMethod::kLinear);
     s.ls_uwb = accuracy(compare_with_truth(ls, tag_truth(rec)), total);
   }
@@ -47,6 +57,8 @@ void print_summary(std::FILE* f, const RunSummary& s) {
       }
     };
     row("uwbnav EKF (default gating)", s.filter, true);
+    if (s.inertial.epochs > 0) row("- of which IMU filter", s.inertial, true);
+    if (s.fallback.epochs > 0) row("- of which ranges-only fallback (start, alignment, recovery)", s.fallback, true);
     row("LS-UWB baseline (tag)", s.ls_uwb, false);
     std::fprintf(f, "\n");
   } else {

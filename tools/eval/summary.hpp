@@ -16,6 +16,8 @@ struct RunSummary {
   bool has_truth = false;
   AccuracyStats filter;       // firmware solution (body origin) vs truth
   AccuracyStats ls_uwb;       // LS-UWB baseline (tag antenna) vs tag truth
+  AccuracyStats inertial;     // the epochs the IMU filter published (NavMode kInertial)
+  AccuracyStats fallback;     // the epochs a fallback published (ranges-only, aligning, recovering)
   uint64_t ranges_used = 0;
   uint64_t ranges_rejected = 0;
   uint64_t ranges_nlos_labelled = 0;   // truth labels (evaluation only)
