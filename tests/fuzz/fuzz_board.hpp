@@ -48,6 +48,7 @@ class SinkCanBus final : public hal::CanBus {
   Status receive(hal::CanFrame&) override { return Status::kEmpty; }
   hal::CanBusState state() const override { return hal::CanBusState::kErrorActive; }
   const hal::CanCounters& counters() const override { return counters_; }
+  void reset_counters() override { counters_ = hal::CanCounters{}; }
 
  private:
   hal::CanCounters counters_;
