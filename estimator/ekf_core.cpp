@@ -112,18 +112,53 @@ void EkfCore::predict_imu(const Vec3& accel_mean_body_mps2, const Vec3& gyro_mea
   }
 }
 
-void EkfCore::predict_cv(Real dt_s, Real accel_psd, Real yaw_psd) {
-  x_.pos_nav_m += x_.vel_nav_mps * dt_s;
-  p_(A + 2, A + 2) += yaw_psd * yaw_psd * dt_s;
-  p_.middleRows<3>(P) += dt_s * p_.middleRows<3>(V);
-  p_.middleCols<3>(P) += dt_s * p_.middleCols<3>(V);
+CvStep cv_step(Real dt_s, Real accel_psd, Real tau_s) {
+  // Integrated Ornstein-Uhlenbeck velocity (Singer 1970 with white jerk
+  // replaced by white acceleration): dv = -v/tau dt + q dW. With b = 1/tau,
+  // x = b dt, phi = exp(-x):
+  //   q_vv = q^2 (1 - phi^2) / (2b)
+  //   q_pv = q^2 (1 - phi)^2 / (2b^2)
+  //   q_pp = q^2 (2x - 3 + 4 phi - phi^2) / (2b^3)
+  // For small x the closed forms cancel in float: their series to O(x^2) is
+  // used instead (relative error < 1e-5 for x < 0.02).
+  CvStep st;
   const Real qa = accel_psd * accel_psd;
-  const Real dt2 = dt_s * dt_s;
+  const Real dt = std::fmax(dt_s, Real(0));
+  const Real tau = tau_s > Real(0) && std::isfinite(tau_s) ? tau_s : Real(0);
+  const Real x = tau > Real(0) ? dt / tau : Real(0);
+  const Real dt2 = dt * dt;
+  if (x < Real(0.02)) {
+    st.f_vv = Real(1) - x * (Real(1) - x * (Real(0.5) - x / Real(6)));
+    st.f_pv = dt * (Real(1) - Real(0.5) * x + x * x / Real(6));
+    st.q_vv = qa * dt * (Real(1) - x * (Real(1) - x * (Real(2) / Real(3) - x / Real(3))));
+    st.q_pv = qa * dt2 * Real(0.5) * (Real(1) - x + Real(7) * x * x / Real(12));
+    st.q_pp = qa * dt2 * dt / Real(3) * (Real(1) - Real(0.75) * x + Real(0.35) * x * x);
+    return st;
+  }
+  const Real phi = std::exp(-x);
+  st.f_vv = phi;
+  st.f_pv = tau * (Real(1) - phi);
+  st.q_vv = qa * tau * Real(0.5) * (Real(1) - phi * phi);
+  st.q_pv = qa * tau * tau * Real(0.5) * (Real(1) - phi) * (Real(1) - phi);
+  st.q_pp = qa * tau * tau * tau * Real(0.5) * (Real(2) * x - Real(3) + Real(4) * phi - phi * phi);
+  return st;
+}
+
+void EkfCore::predict_cv(Real dt_s, Real accel_psd, Real yaw_psd, Real vel_tau_s) {
+  const CvStep st = cv_step(dt_s, accel_psd, vel_tau_s);
+  x_.pos_nav_m += x_.vel_nav_mps * st.f_pv;
+  x_.vel_nav_mps *= st.f_vv;
+  p_(A + 2, A + 2) += yaw_psd * yaw_psd * dt_s;
+  // P <- F P F^T with F = [I f_pv I; 0 f_vv I] on (p, v): rows, then columns.
+  p_.middleRows<3>(P) += st.f_pv * p_.middleRows<3>(V);
+  p_.middleRows<3>(V) *= st.f_vv;
+  p_.middleCols<3>(P) += st.f_pv * p_.middleCols<3>(V);
+  p_.middleCols<3>(V) *= st.f_vv;
   for (int i = 0; i < 3; ++i) {
-    p_(P + i, P + i) += qa * dt2 * dt_s / Real(3);
-    p_(P + i, V + i) += qa * dt2 * Real(0.5);
-    p_(V + i, P + i) += qa * dt2 * Real(0.5);
-    p_(V + i, V + i) += qa * dt_s;
+    p_(P + i, P + i) += st.q_pp;
+    p_(P + i, V + i) += st.q_pv;
+    p_(V + i, P + i) += st.q_pv;
+    p_(V + i, V + i) += st.q_vv;
   }
 }
 

@@ -16,6 +16,21 @@ struct ImuNoise {
   Real gyro_bias_rw = Real(1e-5);    // [rad/s^2/sqrt(Hz)]
 };
 
+// One step of the ranges-only velocity model per nav axis: integrated
+// Ornstein-Uhlenbeck velocity (Singer-type, mean-reverting with time constant
+// tau_s, white acceleration of density q), exact discretisation:
+//   p <- p + f_pv v,   v <- f_vv v,   f_vv = exp(-dt/tau), f_pv = tau (1 - f_vv)
+// and the process noise q_pp, q_pv, q_vv of that step. tau -> infinity gives
+// the constant-velocity model (dt, q dt^3/3, q dt^2/2, q dt); so does tau <= 0.
+struct CvStep {
+  Real f_pv = Real(0);  // [s]
+  Real f_vv = Real(1);  // [-]
+  Real q_pp = Real(0);  // [m^2]
+  Real q_pv = Real(0);  // [m^2/s]
+  Real q_vv = Real(0);  // [m^2/s^2]
+};
+CvStep cv_step(Real dt_s, Real accel_psd, Real tau_s);
+
 // One scalar measurement linearised about the nominal state.
 struct ScalarObs {
   ErrRow h = ErrRow::Zero();  // d(measurement)/d(error state)
@@ -43,10 +58,11 @@ class EkfCore {
   void predict_imu(const Vec3& accel_mean_body_mps2, const Vec3& gyro_mean_body_radps, Real dt_s,
                    Real gravity_mps2, const ImuNoise& noise);
 
-  // Constant-velocity model (no IMU): white acceleration of density
-  // accel_psd [m/s^2/sqrt(Hz)] in every nav axis; the heading walks with
-  // yaw_psd [rad/s/sqrt(Hz)] (turns); tilt and IMU biases frozen.
-  void predict_cv(Real dt_s, Real accel_psd, Real yaw_psd);
+  // Ranges-only velocity model (no IMU): white acceleration of density
+  // accel_psd [m/s^2/sqrt(Hz)] in every nav axis, velocity mean-reverting with
+  // time constant vel_tau_s (cv_step); the heading walks with yaw_psd
+  // [rad/s/sqrt(Hz)] (turns); tilt and IMU biases frozen.
+  void predict_cv(Real dt_s, Real accel_psd, Real yaw_psd, Real vel_tau_s);
 
   // Variance of the innovation of `obs` (H P H^T + R).
   Real innovation_variance(const ErrRow& h, Real r_var) const;

@@ -171,6 +171,8 @@ void Navigator::update_params(const Params& params) {
   c.constraint_period_us = param_us(1e6F / params[ParamId::kEkfConstraintRate]);
   c.cv_accel_psd = static_cast<Real>(params[ParamId::kEkfCvAccelPsd]);
   c.cv_yaw_psd = static_cast<Real>(params[ParamId::kEkfCvYawPsd]);
+  c.cv_vel_tau = static_cast<Real>(params[ParamId::kEkfCvVelTau]);
+  c.cv_speed_sigma = static_cast<Real>(params[ParamId::kEkfCvSpeedSigma]);
   c.init_window_us = param_us(params[ParamId::kEkfInitWindow] * 1e6F);
   c.init_heading_dist = static_cast<Real>(params[ParamId::kEkfInitHeadingDist]);
   c.init_heading_timeout_us = param_us(params[ParamId::kEkfInitHeadingTimeout] * 1e6F);
@@ -255,6 +257,24 @@ Real Navigator::cv_accel_psd(uint64_t t_us) const {
   // otherwise outruns a filter tuned for cruising).
   if (!imu_alive(t_us) || !levelled_) return cfg_.cv_accel_psd;
   return std::sqrt(cfg_.cv_accel_psd * cfg_.cv_accel_psd + accel_h_ms_ * kCvAccelCorrTime_s);
+}
+
+Navigator::CvModel Navigator::cv_model(uint64_t t_us) const {
+  // Without an IMU nothing measures the acceleration: the velocity is a
+  // mean-reverting prior (integrated Ornstein-Uhlenbeck, time constant
+  // ekf.cv_vel_tau) whose stationary 1-sigma per axis, q sqrt(tau/2), covers
+  // the platform's speeds (ekf.cv_speed_sigma): a pedestrian or a vehicle does
+  // not hold its velocity through a long gap, and the claimed sigma stays
+  // bounded by what the platform can do. With an IMU present (aligning,
+  // recovering) its measured horizontal acceleration drives the white
+  // acceleration instead, and a mean reversion would pull against a vehicle
+  // pulling away: constant velocity (tau 0).
+  CvModel m;
+  m.accel_psd = cv_accel_psd(t_us);
+  if (imu_alive(t_us)) return m;
+  m.vel_tau_s = cfg_.cv_vel_tau;
+  m.accel_psd = std::fmax(m.accel_psd, cfg_.cv_speed_sigma * std::sqrt(Real(2) / m.vel_tau_s));
+  return m;
 }
 
 bool Navigator::imu_alive(uint64_t t_us) const {
@@ -523,7 +543,8 @@ RangeReport Navigator::on_range(const UwbRange& range) {
 
   if (!cv_mode_ && !imu_alive(range.t_us)) enter_cv_mode(NavMode::kUwbOnly);
   if (cv_mode_ && range.t_us > t_state_us_) {
-    ekf_.predict_cv(seconds(diff_us(range.t_us, t_state_us_)), cv_accel_psd(range.t_us), cfg_.cv_yaw_psd);
+    const CvModel m = cv_model(range.t_us);
+    ekf_.predict_cv(seconds(diff_us(range.t_us, t_state_us_)), m.accel_psd, cfg_.cv_yaw_psd, m.vel_tau_s);
     t_state_us_ = range.t_us;
     check_health();
     if (phase_ != Phase::kRunning) return rep;
@@ -864,22 +885,26 @@ NavOutput Navigator::output(uint64_t t_us) {
   // no sensor to move on and is extrapolated over any gap (a UWB outage), its
   // covariance growing exactly as the constant-velocity prediction would.
   const Real dt_c = cv_mode_ ? std::fmax(dt, Real(0)) : std::fmin(std::fmax(dt, Real(-0.1)), Real(0.5));
-  const Vec3 pos = x.pos_nav_m + x.vel_nav_mps * dt_c;
+  // The ranges-only model extrapolates with its own transition (cv_step); the
+  // IMU filter with the constant velocity of the last interval.
+  CvStep st;
+  st.f_pv = dt_c;
+  if (cv_mode_ && dt_c > Real(0)) {
+    const CvModel m = cv_model(t_us);
+    st = cv_step(dt_c, m.accel_psd, m.vel_tau_s);
+  }
+  const Vec3 pos = x.pos_nav_m + x.vel_nav_mps * st.f_pv;
   out.pos_nav_m = to_vec3f(pos);
-  out.vel_nav_mps = to_vec3f(x.vel_nav_mps);
+  out.vel_nav_mps = to_vec3f(x.vel_nav_mps * st.f_vv);
   for (int i = 0; i < 4; ++i) out.q_nav_body[i] = static_cast<float>(x.q_nav_body(i));
   Real var_p[3];
   for (int i = 0; i < 3; ++i) {
-    // Position variance at the output time: P_pp + 2 dt P_pv + dt^2 P_vv
-    // (plus, without a CV prediction since the last range, the CV process noise).
-    var_p[i] = p(i, i) + Real(2) * dt_c * p(i, 3 + i) + dt_c * dt_c * p(3 + i, 3 + i);
-    if (cv_mode_ && dt_c > Real(0)) {
-      const Real q = cv_accel_psd(t_us);
-      var_p[i] += q * q * dt_c * dt_c * dt_c / Real(3);
-    }
+    // Position variance at the output time: P_pp + 2 f P_pv + f^2 P_vv + Q_pp
+    // (Q_pp: the ranges-only model's process noise since the last range).
+    var_p[i] = p(i, i) + Real(2) * st.f_pv * p(i, 3 + i) + st.f_pv * st.f_pv * p(3 + i, 3 + i) + st.q_pp;
     var_p[i] = std::fmax(var_p[i], Real(0));
   }
-  Real cxy = p(0, 1) + dt_c * (p(0, 4) + p(3, 1)) + dt_c * dt_c * p(3, 4);
+  Real cxy = p(0, 1) + st.f_pv * (p(0, 4) + p(3, 1)) + st.f_pv * st.f_pv * p(3, 4);
   if (cv_mode_ && !cv_yaw_known_) {
     // Heading unknown: the body origin lies anywhere on the circle of the
     // horizontal lever arm about the tags' centroid (uniform azimuth).
@@ -892,8 +917,10 @@ NavOutput Navigator::output(uint64_t t_us) {
                           static_cast<float>(std::sqrt(var_p[2]))};
   const Real denom = std::sqrt(var_p[0] * var_p[1]);
   out.pos_xy_corr = denom > Real(0) ? static_cast<float>(std::fmin(std::fmax(cxy / denom, Real(-1)), Real(1))) : 0.0F;
-  out.vel_sigma_mps = Vec3f{static_cast<float>(std::sqrt(p(3, 3))), static_cast<float>(std::sqrt(p(4, 4))),
-                            static_cast<float>(std::sqrt(p(5, 5)))};
+  Real var_v[3];
+  for (int i = 0; i < 3; ++i) var_v[i] = std::fmax(st.f_vv * st.f_vv * p(3 + i, 3 + i) + st.q_vv, Real(0));
+  out.vel_sigma_mps = Vec3f{static_cast<float>(std::sqrt(var_v[0])), static_cast<float>(std::sqrt(var_v[1])),
+                            static_cast<float>(std::sqrt(var_v[2]))};
   out.heading_rad = static_cast<float>(quat_yaw(x.q_nav_body));
   if (cv_mode_) {
     out.mode = cv_reason_ == NavMode::kRecovering ? NavMode::kRecovering

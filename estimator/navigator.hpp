@@ -121,6 +121,8 @@ class Navigator {
     uint64_t constraint_period_us = 100000;
     Real cv_accel_psd = Real(1);
     Real cv_yaw_psd = Real(0.3);
+    Real cv_vel_tau = Real(5);      // [s] ranges-only velocity time constant (no IMU)
+    Real cv_speed_sigma = Real(3);  // [m/s] its stationary 1-sigma per axis
     uint64_t init_window_us = 300000;
     Real init_heading_dist = Real(3);
     uint64_t init_heading_timeout_us = 30000000;
@@ -179,6 +181,13 @@ class Navigator {
   // navigator.cpp
   bool imu_alive(uint64_t t_us) const;
   Real cv_accel_psd(uint64_t t_us) const;
+  // The ranges-only model's process at t_us: white acceleration density
+  // [m/s^2/sqrt(Hz)] and velocity time constant [s] (0: constant velocity).
+  struct CvModel {
+    Real accel_psd = Real(1);
+    Real vel_tau_s = Real(0);
+  };
+  CvModel cv_model(uint64_t t_us) const;
   void track_imu_noise(const Vec3& accel_body_mps2, const Vec3& gyro_body_radps, Real dt_s);
   void enter_cv_mode(NavMode reason);
   void apply_constraints(uint64_t t_us);

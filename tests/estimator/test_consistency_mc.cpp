@@ -212,11 +212,73 @@ TEST(ConsistencyMc, ConstantVelocityPredictionCoversWhiteAccelerationTruths) {
     // WHEN the filter predicts once over the whole horizon
     EkfCore ekf;
     ekf.init(est, sigma0);
-    ekf.predict_cv(kHorizon_s, kPsd, Real(0));
+    ekf.predict_cv(kHorizon_s, kPsd, Real(0), Real(0));
     sum += nees(error_of(truth, ekf.state()), ekf.cov(), indices(ErrIdx::kPos, 6));
   }
   // THEN its position and velocity covariance matches the spread
   expect_chi2_mean(sum / kRuns, 6, kRuns, "constant-velocity prediction");
+}
+
+TEST(ConsistencyMc, MeanRevertingVelocityPredictionCoversOrnsteinUhlenbeckTruths) {
+  // GIVEN truths whose velocity mean-reverts (time constant 2 s) under white
+  // acceleration of the claimed density, integrated in 1 ms steps over a
+  // 6 s gap (3 time constants: the closed-form branch of cv_step), and over a
+  // 20 ms step (its series branch)
+  for (const Real horizon_s : {Real(6), Real(0.02)}) {
+    Rng rng(17);
+    constexpr int kRuns = 600;
+    constexpr Real kPsd = Real(1.5);  // [m/s^2/sqrt(Hz)]
+    constexpr Real kTau_s = Real(2);
+    const int sub = static_cast<int>(std::lround(static_cast<double>(horizon_s) * 1000.0));
+    ErrVec sigma0 = ErrVec::Constant(Real(1e-6));
+    sigma0.segment<3>(ErrIdx::kPos).setConstant(Real(0.2));
+    sigma0.segment<3>(ErrIdx::kVel).setConstant(Real(0.5));
+    NominalState est;
+    est.pos_nav_m = Vec3(Real(3), Real(-4), Real(1));
+    est.vel_nav_mps = Vec3(Real(4), Real(1), Real(0));
+    std::normal_distribution<double> n01(0.0, 1.0);
+    double sum = 0.0;
+    const double h = static_cast<double>(horizon_s) / sub;
+    const double tau = static_cast<double>(kTau_s);
+    for (int r = 0; r < kRuns; ++r) {
+      const NominalState t0 = inject(est, draw(rng, sigma0));
+      Eigen::Vector3d p, v;
+      for (int i = 0; i < 3; ++i) {
+        p(i) = static_cast<double>(t0.pos_nav_m(i));
+        v(i) = static_cast<double>(t0.vel_nav_mps(i));
+      }
+      for (int k = 0; k < sub; ++k) {
+        Eigen::Vector3d a;
+        for (int i = 0; i < 3; ++i) a(i) = n01(rng) * static_cast<double>(kPsd) / std::sqrt(h) - v(i) / tau;
+        p += v * h + 0.5 * a * h * h;
+        v += a * h;
+      }
+      NominalState truth = t0;
+      truth.pos_nav_m = p.cast<Real>();
+      truth.vel_nav_mps = v.cast<Real>();
+      // WHEN the filter predicts once over the whole horizon
+      EkfCore ekf;
+      ekf.init(est, sigma0);
+      ekf.predict_cv(horizon_s, kPsd, Real(0), kTau_s);
+      sum += nees(error_of(truth, ekf.state()), ekf.cov(), indices(ErrIdx::kPos, 6));
+    }
+    // THEN its position and velocity covariance matches the spread
+    expect_chi2_mean(sum / kRuns, 6, kRuns, "mean-reverting velocity prediction");
+  }
+}
+
+TEST(ConsistencyMc, CvStepSeriesAndClosedFormAgreeAtTheSwitch) {
+  // GIVEN one step just below and just above the switch x = dt/tau = 0.02
+  // WHEN both branches are evaluated
+  const CvStep lo = cv_step(Real(0.0199999), Real(1.3), Real(1));
+  const CvStep hi = cv_step(Real(0.0200001), Real(1.3), Real(1));
+  // THEN the transition and the process noise are continuous there (a wrong
+  // series term would show as a jump of more than float round-off)
+  EXPECT_NEAR(lo.f_vv, hi.f_vv, 1e-6F);
+  EXPECT_NEAR(lo.f_pv / hi.f_pv, 1.0F, 1e-4F);
+  EXPECT_NEAR(lo.q_vv / hi.q_vv, 1.0F, 1e-4F);
+  EXPECT_NEAR(lo.q_pv / hi.q_pv, 1.0F, 1e-4F);
+  EXPECT_NEAR(lo.q_pp / hi.q_pp, 1.0F, 2e-3F);
 }
 
 TEST(ConsistencyMc, ImuPredictionCoversNoisyAndBiasedImuTruths) {

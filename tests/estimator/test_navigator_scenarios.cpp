@@ -107,6 +107,54 @@ TEST(NavigatorScenario, WithoutImuRunsRangesOnlyFromTheFirstFix) {
   EXPECT_LT(rmse, 0.40);  // the constant-velocity model lags in turns; the parked start carries the lever arm
 }
 
+TEST(NavigatorScenario, WithoutImuALongRangeGapMeanRevertsTheVelocityAndStaysCovered) {
+  // GIVEN a vehicle without IMU whose ranges stop for 20 s (60-80 s) while it
+  // keeps driving its loops with stops and turns
+  dataset::Recording rec = simulate_or_fail("parking_los", 21);
+  std::vector<dataset::UwbRow> kept;
+  for (const auto& r : rec.uwb) {
+    if (r.range.t_us < 60000000 || r.range.t_us >= 80000000) kept.push_back(r);
+  }
+  rec.uwb = kept;
+  // WHEN it runs with the mean-reverting velocity (default) and with constant
+  // velocity (ekf.cv_vel_tau at its maximum)
+  Params cv;
+  ASSERT_EQ(cv.set(ParamId::kEkfCvVelTau, 1000.0F), Status::kOk);
+  const test::RunScore ou_run = test::replay(rec, Params{}, 0, UINT64_MAX, nullptr, /*drop_imu=*/true);
+  const test::RunScore cv_run = test::replay(rec, cv, 0, UINT64_MAX, nullptr, /*drop_imu=*/true);
+  ASSERT_TRUE(ou_run.all_finite);
+  ASSERT_TRUE(cv_run.all_finite);
+  auto gap_stats = [](const test::RunScore& s, double& rms, double& covered, double& speed_end) {
+    double sq = 0;
+    size_t n = 0, in = 0;
+    for (const auto& o : s.outputs) {
+      const double t = static_cast<double>(o.out.t_us) * 1e-6;
+      if (t < 60.5 || t >= 80 || !o.has_truth) continue;
+      const double e2 = o.err_nav_m[0] * o.err_nav_m[0] + o.err_nav_m[1] * o.err_nav_m[1];
+      const double sx = static_cast<double>(o.out.pos_sigma_m.x), sy = static_cast<double>(o.out.pos_sigma_m.y);
+      sq += e2;
+      ++n;
+      // Inside the 2-sigma circle of the larger axis (95 % for a circular error).
+      if (std::sqrt(e2) <= 2.45 * std::max(sx, sy)) ++in;
+      speed_end = std::hypot(static_cast<double>(o.out.vel_nav_mps.x), static_cast<double>(o.out.vel_nav_mps.y));
+    }
+    rms = n > 0 ? std::sqrt(sq / static_cast<double>(n)) : 1e9;
+    covered = n > 0 ? static_cast<double>(in) / static_cast<double>(n) : 0.0;
+  };
+  double ou_rms = 0, ou_cov = 0, ou_speed = 0, cv_rms = 0, cv_cov = 0, cv_speed = 0;
+  gap_stats(ou_run, ou_rms, ou_cov, ou_speed);
+  gap_stats(cv_run, cv_rms, cv_cov, cv_speed);
+  std::printf("20 s gap without IMU: mean-reverting rms %.2f m (covered %.1f %%, speed at end %.2f m/s), "
+              "constant velocity rms %.2f m (covered %.1f %%, speed at end %.2f m/s)\n",
+              ou_rms, 100 * ou_cov, ou_speed, cv_rms, 100 * cv_cov, cv_speed);
+  // THEN the predicted velocity has decayed (tau 5 s: e^-4 after 20 s), the
+  // position error during the gap is smaller than the constant-velocity
+  // extrapolation's, and the claimed sigma still covers it
+  EXPECT_LT(ou_speed, 0.1 * cv_speed + 0.05);
+  EXPECT_LT(ou_rms, cv_rms);
+  EXPECT_GT(ou_cov, 0.9);
+}
+
 TEST(NavigatorScenario, ImuDropoutFallsBackAndRecovers) {
   dataset::Recording rec = simulate_or_fail("parking_los", 16);
   // Remove the IMU between 60 s and 75 s.

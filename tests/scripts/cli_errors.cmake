@@ -106,11 +106,13 @@ maneuver = turn 90 3
   # Help: exit 0, usage on stdout, for every command (and eval's subcommands).
   cli_check(cli_help_lists_commands "-DARGS=help" -DRC=0 "-DOUT=usage: uwbnav <command>.*replay")
   foreach(cmd run sim replay eval train-svm firmware hil params calibrate)
-    cli_check(cli_${cmd}_help_exits_0_with_usage "-DARGS=${cmd}|--help" -DRC=0 "-DOUT=usage: uwbnav ${cmd}")
+    cli_check(cli_${cmd}_help_exits_0_with_usage "-DARGS=${cmd}|--help" -DRC=0 "-DOUT=usage: uwbnav ${cmd}"
+      "-DNOT_OUT=unknown option")
     cli_check(cli_help_${cmd}_exits_0_with_usage "-DARGS=help|${cmd}" -DRC=0 "-DOUT=usage: uwbnav ${cmd}")
   endforeach()
   foreach(sub report nlos family)
-    cli_check(cli_eval_${sub}_help_exits_0_with_usage "-DARGS=eval|${sub}|--help" -DRC=0 "-DOUT=usage: uwbnav eval ${sub}")
+    cli_check(cli_eval_${sub}_help_exits_0_with_usage "-DARGS=eval|${sub}|--help" -DRC=0 "-DOUT=usage: uwbnav eval ${sub}"
+      "-DNOT_OUT=unknown option")
   endforeach()
   cli_check(cli_replay_help_after_arguments_exits_0
     "-DARGS=replay|${cli_dir}/rec|--out|${cli_dir}/o_help|--help" -DRC=0 "-DOUT=usage: uwbnav replay" -DABSENT=${cli_dir}/o_help)

@@ -389,7 +389,7 @@ int run_eval_family(int argc, char** argv) {
   if (!args.error().empty() || !bad.empty() || !args.positional().empty()) {
     std::fprintf(stderr, "%s", usage);
     if (!args.error().empty()) std::fprintf(stderr, "uwbnav eval family: %s\n", args.error().c_str());
-    if (!bad.empty()) std::fprintf(stderr, "uwbnav eval family: unknown option %s\n", bad.c_str());
+    if (!bad.empty() && bad != "--help") std::fprintf(stderr, "uwbnav eval family: unknown option %s\n", bad.c_str());
     return 2;
   }
   const bool fast = args.has("--fast");

@@ -4,6 +4,7 @@
 #   RC        expected exit status
 #   OUT       regular expression the stdout must match (optional)
 #   ERR       regular expression the stderr must match (optional)
+#   NOT_OUT   regular expression the stdout must not match (optional)
 #   INPUT     a file fed to the command's stdin (optional)
 #   ABSENT    a path that must not exist afterwards (optional; removed before the run)
 #   PREPARE   "mkdir|DIR" (a fresh empty directory) or "copy|SRC|DST" (fresh copy of a
@@ -54,6 +55,9 @@ if(NOT rc STREQUAL "${RC}")
 endif()
 if(DEFINED OUT AND NOT out MATCHES "${OUT}")
   message(FATAL_ERROR "stdout does not match '${OUT}'\n${shown}")
+endif()
+if(DEFINED NOT_OUT AND out MATCHES "${NOT_OUT}")
+  message(FATAL_ERROR "stdout matches '${NOT_OUT}'\n${shown}")
 endif()
 if(DEFINED ERR AND NOT err MATCHES "${ERR}")
   message(FATAL_ERROR "stderr does not match '${ERR}'\n${shown}")
