@@ -144,7 +144,18 @@ CvStep cv_step(Real dt_s, Real accel_psd, Real tau_s) {
   return st;
 }
 
-void EkfCore::predict_cv(Real dt_s, Real accel_psd, Real yaw_psd, Real vel_tau_s) {
+void EkfCore::predict_cv(Real dt_s, Real accel_psd, Real yaw_psd, Real vel_tau_s, Real turn_psd) {
+  if (turn_psd > Real(0) && dt_s > Real(0)) {
+    // Turn rate: attitude and gyro bias blocks of predict_imu with a zero
+    // gyro reading (w = -b_g; Phi_att,bg = -C dt), independent of (p, v).
+    const Vec3 w_body = -x_.bg_body_radps;
+    x_.q_nav_body = quat_normalised(quat_mul(x_.q_nav_body, quat_exp(w_body * dt_s)));
+    const Mat3 phi_abg = c_nav_body_ * (-dt_s);
+    p_.middleRows<3>(A) += phi_abg * p_.middleRows<3>(BG);
+    p_.middleCols<3>(A) += p_.middleCols<3>(BG) * phi_abg.transpose();
+    p_(BG + 2, BG + 2) += turn_psd * turn_psd * dt_s;
+    refresh_dcm();
+  }
   const CvStep st = cv_step(dt_s, accel_psd, vel_tau_s);
   x_.pos_nav_m += x_.vel_nav_mps * st.f_pv;
   x_.vel_nav_mps *= st.f_vv;

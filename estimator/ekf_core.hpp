@@ -61,8 +61,11 @@ class EkfCore {
   // Ranges-only velocity model (no IMU): white acceleration of density
   // accel_psd [m/s^2/sqrt(Hz)] in every nav axis, velocity mean-reverting with
   // time constant vel_tau_s (cv_step); the heading walks with yaw_psd
-  // [rad/s/sqrt(Hz)] (turns); tilt and IMU biases frozen.
-  void predict_cv(Real dt_s, Real accel_psd, Real yaw_psd, Real vel_tau_s);
+  // [rad/s/sqrt(Hz)]; tilt and accelerometer bias frozen. turn_psd > 0
+  // [rad/s^2/sqrt(Hz)] adds the turn rate: the IMU model with a gyro that
+  // reads zero, so the body rate is -b_g and b_g,z walks with turn_psd
+  // (constant turn rate); turn_psd 0 freezes b_g as well.
+  void predict_cv(Real dt_s, Real accel_psd, Real yaw_psd, Real vel_tau_s, Real turn_psd = Real(0));
 
   // Variance of the innovation of `obs` (H P H^T + R).
   Real innovation_variance(const ErrRow& h, Real r_var) const;

@@ -173,6 +173,7 @@ void Navigator::update_params(const Params& params) {
   c.cv_yaw_psd = static_cast<Real>(params[ParamId::kEkfCvYawPsd]);
   c.cv_vel_tau = static_cast<Real>(params[ParamId::kEkfCvVelTau]);
   c.cv_speed_sigma = static_cast<Real>(params[ParamId::kEkfCvSpeedSigma]);
+  c.cv_turn_psd = static_cast<Real>(params[ParamId::kEkfCvTurnPsd]);
   c.init_window_us = param_us(params[ParamId::kEkfInitWindow] * 1e6F);
   c.init_heading_dist = static_cast<Real>(params[ParamId::kEkfInitHeadingDist]);
   c.init_heading_timeout_us = param_us(params[ParamId::kEkfInitHeadingTimeout] * 1e6F);
@@ -274,6 +275,8 @@ Navigator::CvModel Navigator::cv_model(uint64_t t_us) const {
   if (imu_alive(t_us)) return m;
   m.vel_tau_s = cfg_.cv_vel_tau;
   m.accel_psd = std::fmax(m.accel_psd, cfg_.cv_speed_sigma * std::sqrt(Real(2) / m.vel_tau_s));
+  // With a heading, the turn rate is a state too (no gyro measures it).
+  if (cv_yaw_known_) m.turn_psd = cfg_.cv_turn_psd;
   return m;
 }
 
@@ -409,6 +412,7 @@ void Navigator::enter_cv_mode(NavMode reason) {
   ekf_.mutable_state().q_nav_body = quat_from_yaw(quat_yaw(ekf_.state().q_nav_body));
   ekf_.refresh_dcm();
   heading_wait_since_us_ = 0;
+  if (reason == NavMode::kUwbOnly) cv_start_turn_rate();
 }
 
 int Navigator::lend_bias_slot(int anchor_index, uint64_t t_us) {
@@ -544,7 +548,7 @@ RangeReport Navigator::on_range(const UwbRange& range) {
   if (!cv_mode_ && !imu_alive(range.t_us)) enter_cv_mode(NavMode::kUwbOnly);
   if (cv_mode_ && range.t_us > t_state_us_) {
     const CvModel m = cv_model(range.t_us);
-    ekf_.predict_cv(seconds(diff_us(range.t_us, t_state_us_)), m.accel_psd, cfg_.cv_yaw_psd, m.vel_tau_s);
+    ekf_.predict_cv(seconds(diff_us(range.t_us, t_state_us_)), m.accel_psd, cfg_.cv_yaw_psd, m.vel_tau_s, m.turn_psd);
     t_state_us_ = range.t_us;
     check_health();
     if (phase_ != Phase::kRunning) return rep;
@@ -843,6 +847,7 @@ void Navigator::recover(uint64_t t_us, uint8_t min_level) {
   track_head_ = 0;
   track_count_ = 0;
   for (auto& f : last_fix_per_tag_) f = TrackFix{};
+  heading_avg_ = HeadingAverage{};
   gsf_.reset();
   start_cv_filter(t_us, fix, reason);
   recovery_level_ = 3;

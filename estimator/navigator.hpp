@@ -123,6 +123,7 @@ class Navigator {
     Real cv_yaw_psd = Real(0.3);
     Real cv_vel_tau = Real(5);      // [s] ranges-only velocity time constant (no IMU)
     Real cv_speed_sigma = Real(3);  // [m/s] its stationary 1-sigma per axis
+    Real cv_turn_psd = Real(1);     // [rad/s^2/sqrt(Hz)] turn-rate walk without IMU
     uint64_t init_window_us = 300000;
     Real init_heading_dist = Real(3);
     uint64_t init_heading_timeout_us = 30000000;
@@ -177,6 +178,8 @@ class Navigator {
   void align_in_background(int anchor_index, int tag_index, const UwbRange& range);
   void cv_set_yaw(Real yaw_rad, Real yaw_sigma_rad);
   void cv_forget_yaw();
+  void cv_start_turn_rate();
+  bool average_two_tag_heading(uint64_t t_us, Real yaw_rad, Real sigma_rad, Real baseline_m);
 
   // navigator.cpp
   bool imu_alive(uint64_t t_us) const;
@@ -186,6 +189,7 @@ class Navigator {
   struct CvModel {
     Real accel_psd = Real(1);
     Real vel_tau_s = Real(0);
+    Real turn_psd = Real(0);  // [rad/s^2/sqrt(Hz)], 0: no turn-rate state
   };
   CvModel cv_model(uint64_t t_us) const;
   void track_imu_noise(const Vec3& accel_body_mps2, const Vec3& gyro_body_radps, Real dt_s);
@@ -280,6 +284,16 @@ class Navigator {
   size_t track_head_ = 0;
   size_t track_count_ = 0;
   TrackFix last_fix_per_tag_[kMaxTags];
+  // Two-tag heading without IMU, averaged over independent fixes while the
+  // vehicle holds its heading (docs/ekf.md "Heading from the tags").
+  struct HeadingAverage {
+    Real sum_c = Real(0);  // weighted unit vectors, sum of w cos(yaw) [1/rad^2]
+    Real sum_s = Real(0);  // sum of w sin(yaw) [1/rad^2]
+    Real sum_w = Real(0);  // sum of the weights w = 1/sigma^2 [1/rad^2]
+    int n = 0;             // samples
+    uint64_t last_t_us = 0;
+  };
+  HeadingAverage heading_avg_;
   uint64_t last_fix_try_us_[kMaxTags] = {};  // last LS fix attempt per tag (track at ~10 Hz)
   uint64_t heading_wait_since_us_ = 0;
   bool have_fix_ = false;

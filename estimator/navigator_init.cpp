@@ -19,7 +19,13 @@ constexpr uint64_t kTrackMaxSpanUs = 20000000;    // heading chord: longest time
 constexpr Real kMinChord_m = Real(0.5);            // heading: shortest chord of the LS track [m]
 constexpr Real kChordMinSpeed_mps = Real(1);       // heading: the ranges-only filter must see at least this speed [m/s]
 constexpr Real kMaxChordSpreadRad = Real(0.35);    // heading: largest disagreement between chords [rad]
-constexpr Real kMinBaseline_m = Real(0.3);         // two-tag heading: shortest horizontal baseline [m]
+constexpr Real kMinBaseline_m = Real(0.1);         // two-tag heading: shortest horizontal baseline [m]
+constexpr uint64_t kHeadingSampleGapUs = 300000;  // two-tag heading average: shortest interval between samples (independent fixes) [us]
+constexpr uint64_t kHeadingMaxGapUs = 2000000;    // two-tag heading average: a longer pause starts it again [us]
+constexpr int kHeadingMinSamples = 5;              // two-tag heading average: fewest samples handed over
+constexpr Real kHeadingMaxSigma_rad = Real(0.3);   // two-tag heading average: largest 1-sigma handed over [rad]
+constexpr Real kCvTurnRateSigma_radps = Real(0.5);  // ranges-only turn rate without IMU: prior 1-sigma [rad/s]
+constexpr Real kHeadingOffsetDop = Real(1.5);      // two-tag heading average: horizontal DOP of a tag fix under range offsets
 constexpr Real kWeakHeightFactor = Real(5);        // auto height mode, non-planar anchors: sigma multiplier
 constexpr uint64_t kTrackSpacingUs = 200000;      // track: shortest interval between stored fixes (5 Hz) [us]
 constexpr uint64_t kTrackFreshUs = 1000000;       // rest check: LS track span looked at [us]
@@ -64,6 +70,7 @@ void Navigator::restart(bool counted_reset) {
     for (auto& v : row) v = false;
   }
   for (auto& f : last_fix_per_tag_) f = TrackFix{};
+  heading_avg_ = HeadingAverage{};
   for (auto& t : last_fix_try_us_) t = 0;
   gsf_last_update_us_ = 0;
   track_head_ = 0;
@@ -292,6 +299,7 @@ void Navigator::begin_imu_recovery() {
   track_head_ = 0;
   track_count_ = 0;
   for (auto& f : last_fix_per_tag_) f = TrackFix{};
+  heading_avg_ = HeadingAverage{};
   first_imu_t_us_ = 0;
   heading_wait_since_us_ = 0;
   gsf_.reset();
@@ -393,10 +401,16 @@ void Navigator::try_heading(uint64_t t_us) {
         start_filter(t_us, yaw0, yaw_sigma);
         return;
       }
-      // Without IMU the ranges-only filter then carries the heading itself.
-      if (cv_mode_ && !cv_yaw_known_ && len >= kMinBaseline_m && len >= Real(4) * sig) {
-        cv_set_yaw(wrap_pi(yaw0 + quat_yaw(q_init_)), yaw_sigma);
-        return;
+      // Without IMU the ranges-only filter then carries the heading itself:
+      // from one pair of fixes when the baseline is long enough, else from the
+      // average of independent pairs (a short baseline, as on a trolley).
+      if (cv_mode_ && !cv_yaw_known_ && len >= kMinBaseline_m) {
+        const Real yaw_abs = wrap_pi(yaw0 + quat_yaw(q_init_));
+        if (len >= Real(4) * sig) {
+          cv_set_yaw(yaw_abs, yaw_sigma);
+          return;
+        }
+        if (average_two_tag_heading(t_us, yaw_abs, yaw_sigma, len)) return;
       }
     }
   }
@@ -483,6 +497,66 @@ void Navigator::cv_set_yaw(Real yaw_rad, Real yaw_sigma_rad) {
   ekf_.add_variance(ErrIdx::kPos, lever_var);
   ekf_.add_variance(ErrIdx::kPos + 1, lever_var);
   cv_yaw_known_ = true;
+  heading_avg_ = HeadingAverage{};
+  if (!imu_alive(t_state_us_)) cv_start_turn_rate();
+}
+
+void Navigator::cv_start_turn_rate() {
+  // Without IMU the gyro-bias state carries the turn rate (body rate = -b_g,
+  // EkfCore::predict_cv): it starts at zero with kCvTurnRateSigma_radps.
+  ekf_.mutable_state().bg_body_radps.setZero();
+  for (int i = 0; i < 3; ++i) {
+    ekf_.reset_state(ErrIdx::kBg + i, i == 2 ? kCvTurnRateSigma_radps * kCvTurnRateSigma_radps : Real(0));
+  }
+}
+
+bool Navigator::average_two_tag_heading(uint64_t t_us, Real yaw_rad, Real sigma_rad, Real baseline_m) {
+  // Weighted circular mean of two-tag headings from fixes at least
+  // kHeadingSampleGapUs apart (no range shared: independent noise). Without a
+  // gyro a turn shows only as a sample the mean does not explain (beyond 3
+  // sigma): the average starts again from it, as after a pause. The tags'
+  // range offsets do not average out (they move a fix the same way for
+  // seconds): their part stays in the handed-over sigma. Returns true when
+  // the ranges-only filter took the heading.
+  HeadingAverage& h = heading_avg_;
+  if (h.n > 0 && t_us >= h.last_t_us && t_us - h.last_t_us < kHeadingSampleGapUs) return false;
+  if (h.n > 0 && (t_us < h.last_t_us || t_us - h.last_t_us > kHeadingMaxGapUs)) h = HeadingAverage{};
+  if (h.n > 0) {
+    const Real mean = std::atan2(h.sum_s, h.sum_c);
+    const Real dev = wrap_pi(yaw_rad - mean);
+    if (dev * dev > Real(9) * (sigma_rad * sigma_rad + Real(1) / h.sum_w)) h = HeadingAverage{};
+  }
+  const Real w = Real(1) / (sigma_rad * sigma_rad);
+  h.sum_c += w * std::cos(yaw_rad);
+  h.sum_s += w * std::sin(yaw_rad);
+  h.sum_w += w;
+  ++h.n;
+  h.last_t_us = t_us;
+  // Noise part of the mean: the fixes' claimed sigma (conservative: the LS
+  // a-posteriori factor and the speed-age inflation), or - once there are
+  // enough samples - twice the scatter the samples actually show, whichever
+  // is smaller (circular variance of the weighted resultant length R, bounded
+  // above without a logarithm: -2 ln R <= 2 (1 - R) / R).
+  Real var_noise = Real(1) / h.sum_w;
+  if (h.n >= kHeadingMinSamples) {
+    const Real r = std::fmin(std::sqrt(h.sum_c * h.sum_c + h.sum_s * h.sum_s) / h.sum_w, Real(1));
+    const Real var_scatter = r > Real(1e-3) ? Real(2) * (Real(1) - r) / r : Real(1e3);
+    var_noise = std::fmin(var_noise, Real(4) * var_scatter / static_cast<Real>(h.n));
+  }
+  // Systematic part: survey errors move both tags' fixes alike and cancel in
+  // the baseline; range offsets do not (each anchor-tag pair has its own on
+  // real radios): the offsets' prior per range (the commissioned residual
+  // when a calibration is loaded) through the fix's DOP, for each tag.
+  const size_t n_anchors = site_.num_anchors > 0 ? site_.num_anchors : 1;
+  const Real cal = site_.range_offset_sigma_m;
+  const Real anchor_off = std::isfinite(cal) ? cal : cfg_.anchor_bias_sigma;
+  const Real pair_var = anchor_off * anchor_off + tag_bias_prior_var();
+  const Real offset_m = kHeadingOffsetDop * std::sqrt(Real(2) * pair_var / static_cast<Real>(n_anchors));
+  const Real sigma_sys = std::atan2(offset_m, baseline_m);
+  const Real sigma = std::sqrt(var_noise + sigma_sys * sigma_sys);
+  if (h.n < kHeadingMinSamples || !(sigma < kHeadingMaxSigma_rad)) return false;
+  cv_set_yaw(std::atan2(h.sum_s, h.sum_c), sigma);
+  return true;
 }
 
 void Navigator::cv_forget_yaw() {
@@ -492,6 +566,7 @@ void Navigator::cv_forget_yaw() {
   lev_nav.z() = Real(0);
   x.pos_nav_m += lev_nav;
   cv_yaw_known_ = false;
+  heading_avg_ = HeadingAverage{};
 }
 
 void Navigator::start_cv_filter(uint64_t t_us, const TrackFix& fix, NavMode reason) {
