@@ -9,6 +9,7 @@
 
 #include "estimator/mm_height.hpp"
 #include "estimator/mm_nhc.hpp"
+#include "estimator/mm_position.hpp"
 #include "estimator/mm_range.hpp"
 #include "estimator/mm_zupt.hpp"
 
@@ -72,6 +73,12 @@ constexpr Real kInflatePosVar_m2 = Real(1.0);
 constexpr Real kInflateVelVar_m2ps2 = Real(1.0);
 constexpr Real kInflateYawVar_rad2 = Real(0.04);
 constexpr Real kReanchorVelSigma_mps = Real(1.5);
+#if UWBNAV_RBF_BRIDGE
+// Outage bridging: one pseudo-measurement per period [us]; innovations beyond
+// this many sigmas of S are not fused (the network is off the mark).
+constexpr uint64_t kBridgePeriodUs = 1000000;
+constexpr Real kBridgeGateSigma = Real(5);
+#endif
 
 }  // namespace
 
@@ -185,6 +192,10 @@ void Navigator::update_params(const Params& params) {
   c.degraded_sigma = static_cast<Real>(params[ParamId::kEkfDegradedSigma]);
   c.init_speed = static_cast<Real>(params[ParamId::kEkfInitSpeed]);
   c.init_yaw_sigma = static_cast<Real>(params[ParamId::kEkfInitYawSigma]);
+  c.rbf_mode = static_cast<RbfMode>(std::lround(params[ParamId::kEkfRbfBridge]));
+#if UWBNAV_RBF_BRIDGE
+  bridge_.configure(c.rbf_mode);
+#endif
   imu_eff_ = c.imu;
   rest_.configure(static_cast<Real>(params[ParamId::kEkfRestWindow]), static_cast<Real>(params[ParamId::kEkfRestAccelStd]),
                   static_cast<Real>(params[ParamId::kEkfRestGyroMax]));
@@ -339,6 +350,7 @@ Status Navigator::on_imu(const ImuSample& imu) {
     t_state_us_ = imu.t_us;
     apply_constraints(imu.t_us);
     check_health();
+    if (phase_ == Phase::kRunning && !cv_mode_) bridge_outage(imu.t_us, f_mean, w_mean, dt);
   }
   prev_imu_ = imu;
   have_prev_imu_ = true;
@@ -392,6 +404,53 @@ void Navigator::apply_constraints(uint64_t t_us) {
 }
 
 bool Navigator::fuse(const ScalarObs& obs) { return ekf_.update(obs).applied; }
+
+void Navigator::bridge_outage(uint64_t t_us, const Vec3& accel_mean_body_mps2, const Vec3& gyro_mean_body_radps,
+                              Real dt_s) {
+#if UWBNAV_RBF_BRIDGE
+  // Seed 004 fig. 3 on the error-state filter (docs/ekf.md "Outage bridging"):
+  // the network learns while ranges are fused and, during an outage, gives a
+  // horizontal position pseudo-measurement with its own error variance. Its
+  // successive predictions share most of their error (same shadow, same
+  // weights), so the k-th of an outage is fused with k times its variance:
+  // N of them carry the information of H_N = 1 + 1/2 + ... + 1/N (< 4 for a
+  // 30 s outage) predictions instead of N. A compromise, not a bound: the
+  // share of the error inside the claimed 2 sigma (uwbnav eval outage) checks it.
+  if (cfg_.rbf_mode == RbfMode::kOff) return;
+  const uint64_t last_fix = diag_.last_range_used_t_us > running_since_us_ ? diag_.last_range_used_t_us : 0;
+  bridge_.on_imu(t_us, accel_mean_body_mps2, gyro_mean_body_radps, dt_s, static_cast<Real>(site_.gravity_mps2),
+                 ekf_.state(), last_fix);
+  const bool outage = last_fix != 0 && t_us > last_fix && t_us - last_fix > cfg_.uwb_timeout_us;
+  if (outage && (bridge_last_us_ == 0 || t_us - bridge_last_us_ >= kBridgePeriodUs)) {
+    RbfBridge::Correction c;
+    if (bridge_.predict(t_us, c)) {
+      bridge_last_us_ = t_us;
+      if (cfg_.rbf_mode == RbfMode::kOn) {
+        ++bridge_count_;
+        const Real z[2] = {c.pos_x_nav_m, c.pos_y_nav_m};
+        const Real var[2] = {c.var_x_m2, c.var_y_m2};
+        for (int axis = 0; axis < 2; ++axis) {
+          const ScalarObs obs =
+              mm_position(ekf_.state(), axis, z[axis], static_cast<Real>(bridge_count_) * var[axis]);
+          const Real s_var = ekf_.innovation_variance(obs.h, obs.r_var);
+          if (!(obs.r_var > Real(0)) ||
+              !(obs.innovation * obs.innovation <= kBridgeGateSigma * kBridgeGateSigma * s_var)) {
+            continue;
+          }
+          if (fuse(obs)) bridge_.note_fused();
+        }
+        check_health(false);
+      }
+    }
+  }
+  diag_.rbf = bridge_.diag();
+#else
+  (void)t_us;
+  (void)accel_mean_body_mps2;
+  (void)gyro_mean_body_radps;
+  (void)dt_s;
+#endif
+}
 
 void Navigator::check_health(bool after_predict) {
   if (!(after_predict ? ekf_.sanitise_after_predict() : ekf_.sanitise(false))) restart(true);
@@ -652,6 +711,11 @@ RangeReport Navigator::on_range(const UwbRange& range) {
     ++diag_.ranges_used;
     ++cycle_used_;
     diag_.last_range_used_t_us = range.t_us;
+#if UWBNAV_RBF_BRIDGE
+    if (!cv_mode_) bridge_.on_fix(range.t_us, ekf_.state());
+    bridge_last_us_ = 0;
+    bridge_count_ = 0;
+#endif
   } else {
     ++diag_.ranges_rejected;
     ++cycle_rejected_;
@@ -789,6 +853,10 @@ void Navigator::recover(uint64_t t_us, uint8_t min_level) {
   if (level < min_level) level = min_level;
   last_recovery_us_ = t_us;
   recovery_level_ = level > 3 ? uint8_t(3) : level;
+#if UWBNAV_RBF_BRIDGE
+  // The filter was inconsistent (and may jump now): windows in flight measure nothing.
+  bridge_.restart_shadows();
+#endif
   monitor_head_ = 0;
   monitor_count_ = 0;
   const Real anchor_var = anchor_bias_prior_var();

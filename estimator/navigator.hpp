@@ -10,10 +10,17 @@
 #include "estimator/ls_taylor.hpp"
 #include "estimator/nlos/gating_layer.hpp"
 #include "estimator/params.hpp"
+#include "estimator/rbf_bridge.hpp"
 #include "estimator/rest_detector.hpp"
 #include "estimator/status.hpp"
 #include "estimator/types.hpp"
 #include "estimator/yaw_gsf.hpp"
+
+// Outage bridging with the RBF network (estimator/rbf_bridge.hpp). Boards short
+// of RAM build without it (0: ekf.rbf_bridge is accepted and has no effect).
+#ifndef UWBNAV_RBF_BRIDGE
+#define UWBNAV_RBF_BRIDGE 1
+#endif
 
 namespace uwbnav {
 
@@ -34,6 +41,7 @@ struct NavDiagnostics {
   uint64_t last_imu_t_us = 0;
   uint64_t last_range_used_t_us = 0;
   float uwb_sigma_m = 0.0F;      // learned LOS ranging 1-sigma [m]
+  RbfBridgeDiag rbf;             // outage bridging (ekf.rbf_bridge): training, predictions, fusions
 };
 
 // The range-error state of one anchor, for the console and diagnostics.
@@ -135,6 +143,7 @@ class Navigator {
     Real degraded_sigma = Real(1);
     Real init_speed = Real(1);
     Real init_yaw_sigma = Real(0.12);
+    RbfMode rbf_mode = RbfMode::kOff;
   };
 
   // Latest range per anchor/tag pair (LS fixes).
@@ -194,6 +203,7 @@ class Navigator {
   CvModel cv_model(uint64_t t_us) const;
   void track_imu_noise(const Vec3& accel_body_mps2, const Vec3& gyro_body_radps, Real dt_s);
   void enter_cv_mode(NavMode reason);
+  void bridge_outage(uint64_t t_us, const Vec3& accel_mean_body_mps2, const Vec3& gyro_mean_body_radps, Real dt_s);
   void apply_constraints(uint64_t t_us);
   bool fuse(const ScalarObs& obs);
   void check_health(bool after_predict = true);
@@ -309,6 +319,13 @@ class Navigator {
   bool monitor_bad_[kMonitorCapacity] = {};
   size_t monitor_head_ = 0;
   size_t monitor_count_ = 0;
+
+#if UWBNAV_RBF_BRIDGE
+  // Outage bridging: the network, and per outage its pseudo-measurements so far.
+  RbfBridge bridge_;
+  uint64_t bridge_last_us_ = 0;   // last pseudo-measurement [us]
+  uint32_t bridge_count_ = 0;     // pseudo-measurements in the current outage
+#endif
 
   uint16_t cycle_used_ = 0;
   uint16_t cycle_rejected_ = 0;

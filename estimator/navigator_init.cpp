@@ -91,6 +91,12 @@ void Navigator::restart(bool counted_reset) {
   }
   gating_.reset();
   gsf_.reset();
+#if UWBNAV_RBF_BRIDGE
+  // The network learnt the drift of this filter's estimates (biases, tilt): gone with it.
+  bridge_.reset();
+  bridge_last_us_ = 0;
+  bridge_count_ = 0;
+#endif
   ekf_.init(NominalState{}, ErrVec::Ones());
 }
 

@@ -11,6 +11,12 @@
 
 namespace uwbnav {
 
+// Default of ekf.rbf_bridge (0 off); a board build may switch the network on
+// by default to measure its cost (hal/mps2 UWBNAV_MPS2_RBF_BRIDGE=2).
+#ifndef UWBNAV_RBF_BRIDGE_DEFAULT
+#define UWBNAV_RBF_BRIDGE_DEFAULT 0.0F
+#endif
+
 enum class ParamId : uint16_t {
 #define X(e, id, name, unit, kind, def, lo, hi, doc) e,
 #include "estimator/params_table.inc"

@@ -33,6 +33,14 @@ find docs/results -name 'series_*.csv' -delete -o -name 'track_*.csv' -delete -o
   echo "Reproduce: \`uwbnav eval family --real --markdown\`."
   echo
   "$uwbnav" eval family --real --markdown | sed -e '/^wall time/d'
+  echo
+  echo "## UWB outage bridging with the RBF network of seed 004 (issue 15)"
+  echo
+  echo "Per reporting seed the family's outage drive and the seed-like parking_outages preset,"
+  echo "each replayed with \`ekf.rbf_bridge\` 0 (coasting) and 1 (network); docs/ekf.md \"Outage bridging\"."
+  echo "Developed on the tuning seeds only. Reproduce: \`uwbnav eval outage --seeds reporting --markdown\`."
+  echo
+  "$uwbnav" eval outage --seeds reporting --markdown --jobs 2
 
 } > docs/results.md
 echo "make_results: wrote docs/results.md"

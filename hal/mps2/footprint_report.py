@@ -126,6 +126,13 @@ def main():
              "UWB frames per cycle, see `hal/mps2/CMakeLists.txt`),")
     L.append("running the firmware's `App::tick()` over a 30 s recording (`hal/mps2/replay_scenario.ini`:")
     L.append("the `parking_nlos` preset with ranging at 400 Hz, i.e. 4 ranges in every 10 ms cycle).")
+    rbf = cfg.get("UWBNAV_MPS2_RBF_BRIDGE", "0")
+    rbf_text = {"0": "compiled out (`UWBNAV_MPS2_RBF_BRIDGE=0`, the board default; its cost with it on: "
+                     "[footprint_rbf.md](footprint_rbf.md))",
+                "1": "compiled in, `ekf.rbf_bridge` off by default (`UWBNAV_MPS2_RBF_BRIDGE=1`)",
+                "2": "compiled in and on (`UWBNAV_MPS2_RBF_BRIDGE=2`: `ekf.rbf_bridge` = 1 by default), "
+                     "training on every cycle of the replay"}.get(rbf, f"`UWBNAV_MPS2_RBF_BRIDGE={rbf}`")
+    L.append(f"RBF outage bridge (estimator/rbf_*, docs/ekf.md \"Outage bridging\"): {rbf_text}.")
     L.append("")
     L.append("## Summary")
     L.append("")

@@ -10,6 +10,7 @@
 #include "error_injection.hpp"
 #include "estimator/mm_height.hpp"
 #include "estimator/mm_nhc.hpp"
+#include "estimator/mm_position.hpp"
 #include "estimator/mm_range.hpp"
 #include "estimator/mm_zupt.hpp"
 
@@ -165,6 +166,18 @@ TEST(MmHeight, JacobianMatchesNumeric) {
   expect_row_near(obs.h, numeric_jacobian(x, [](const NominalState& y) { return static_cast<double>(y.pos_nav_m.z()); }),
                   kTol);
   EXPECT_NEAR(static_cast<double>(obs.innovation), 0.1 - 0.4, 1e-6);
+}
+
+TEST(MmPosition, JacobianMatchesNumericOnBothHorizontalAxes) {
+  const NominalState x = sample_state();
+  for (int axis = 0; axis < 2; ++axis) {
+    const ScalarObs obs = mm_position(x, axis, Real(2.5), Real(0.04));
+    expect_row_near(obs.h,
+                    numeric_jacobian(x, [axis](const NominalState& y) { return static_cast<double>(y.pos_nav_m(axis)); }),
+                    kTol);
+    EXPECT_NEAR(static_cast<double>(obs.innovation), 2.5 - static_cast<double>(x.pos_nav_m(axis)), 1e-6);
+    EXPECT_EQ(obs.r_var, Real(0.04));
+  }
 }
 
 }  // namespace
