@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# Issue 19 workflow on the trolley3 cell of the scenario family (3 tags 0.3 m
+# apart, 8 anchors, per-pair offsets 0.1-0.3 m, no IMU): each drive is first
+# commissioned by self-calibration (`uwbnav calibrate --method self`: no truth,
+# no surveyed points) and then replayed with that calibration file loaded, as a
+# site engineer would do with the commissioning drive itself. Prints a markdown
+# table per drive (horizontal RMSE / MAX, heading error p90, claimed 2-sigma
+# share, ranges fused, calibration residual) and the medians.
+# Usage: scripts/trolley_commissioned.sh UWBNAV FIRST_SEED LAST_SEED [WORK_DIR]
+set -euo pipefail
+uwbnav="$1"
+first="$2"
+last="$3"
+work="${4:-$(mktemp -d)}"
+mkdir -p "$work"
+
+echo "| drive | RMSE h [m] | MAX h [m] | heading p90 [deg] | in 2σ (circle) | ranges fused | uncalibrated RMSE h [m] |"
+echo "|---|---:|---:|---:|---:|---:|---:|"
+for seed in $(seq "$first" "$last"); do
+  d="$work/trolley3_$seed"
+  rm -rf "$d"
+  "$uwbnav" sim "family:trolley3:$seed" --out "$d/recording" >/dev/null
+  "$uwbnav" calibrate "$d/recording" --method self --out "$d/site.cal" >"$d/calibrate.txt"
+  "$uwbnav" replay "$d/recording" --out "$d/cal" --cal "$d/site.cal" >"$d/replay_cal.txt"
+  "$uwbnav" replay "$d/recording" --out "$d/raw" >"$d/replay_raw.txt"
+  /usr/bin/python3 - "$d" "$seed" <<'EOF'
+import csv, math, sys
+d, seed = sys.argv[1], sys.argv[2]
+
+def rows(path):
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+truth = rows(d + "/recording/truth.csv")
+tt = [float(r["t_s"]) for r in truth]
+
+def truth_at(t):
+    import bisect
+    i = min(max(bisect.bisect_left(tt, t), 1), len(tt) - 1)
+    a, b = truth[i - 1], truth[i]
+    w = 0.0 if tt[i] == tt[i - 1] else (t - tt[i - 1]) / (tt[i] - tt[i - 1])
+    x = float(a["x_m"]) + w * (float(b["x_m"]) - float(a["x_m"]))
+    y = float(a["y_m"]) + w * (float(b["y_m"]) - float(a["y_m"]))
+    q = [float(a[k]) for k in ("qw", "qx", "qy", "qz")]
+    return x, y, math.atan2(2 * (q[0] * q[3] + q[1] * q[2]), 1 - 2 * (q[2] ** 2 + q[3] ** 2))
+
+def score(run):
+    sq, n, mx, inside, herr = 0.0, 0, 0.0, 0, []
+    for r in rows(d + "/" + run + "/estimates.csv"):
+        if not r["x_m"] or r["x_m"] == "nan":
+            continue
+        t = float(r["t_s"])
+        if t < tt[0] or t > tt[-1]:
+            continue
+        x, y, yaw = truth_at(t)
+        e = math.hypot(float(r["x_m"]) - x, float(r["y_m"]) - y)
+        sq += e * e
+        n += 1
+        mx = max(mx, e)
+        if e <= 2.45 * max(float(r["sx_m"]), float(r["sy_m"])):
+            inside += 1
+        q = [float(r[k]) for k in ("qw", "qx", "qy", "qz")]
+        est = math.atan2(2 * (q[0] * q[3] + q[1] * q[2]), 1 - 2 * (q[2] ** 2 + q[3] ** 2))
+        herr.append(abs(math.degrees(math.remainder(est - yaw, 2 * math.pi))))
+    herr.sort()
+    rr = rows(d + "/" + run + "/ranges.csv")
+    fused = sum(1 for r in rr if r["used"] == "1") / max(len(rr), 1)
+    return math.sqrt(sq / n), mx, herr[len(herr) * 9 // 10], inside / n, fused
+
+cal = score("cal")
+raw = score("raw")
+print("| family:trolley3:%s | %.3f | %.3f | %.1f | %.1f %% | %.1f %% | %.3f |" %
+      (seed, cal[0], cal[1], cal[2], 100 * cal[3], 100 * cal[4], raw[0]))
+EOF
+done
