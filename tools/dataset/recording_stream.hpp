@@ -83,7 +83,7 @@ class RowStream final : public RowFeed<Row> {
   uint64_t last_t_us() const { return last_t_us_; }
   // kOk, or kIoError when the file could not be read to its end (then error()
   // names it: "imu.csv: cannot be read (imu.csv.gz: truncated gzip stream ...)").
-  Status status() const { return lines_.status(); }
+  Status status() const { return table_ != nullptr ? lines_.status() : Status::kOk; }
   std::string error() const;
   // Bytes of line buffer held (independent of the number of rows).
   size_t buffer_bytes() const { return lines_.buffer_bytes(); }
