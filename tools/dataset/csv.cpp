@@ -104,7 +104,13 @@ bool LineReader::next(const char*& begin, const char*& end) {
   for (;;) {
     if (pos_ < size_) {
       nl = static_cast<const char*>(std::memchr(data_ + pos_, '\n', size_ - pos_));
-      if (nl != nullptr || eof_) break;
+      if (nl != nullptr) break;
+      // An unterminated last line counts only when the file was read to its
+      // end: after a read error it is a fragment, never a row.
+      if (eof_) {
+        if (!ok(status())) return false;
+        break;
+      }
     } else if (eof_) {
       return false;
     }
