@@ -8,33 +8,20 @@
 
 #include "firmware/app.hpp"
 #include "firmware/param_text.hpp"
-#include "hal/host/candump_log.hpp"
 #include "hal/host/file_param_store.hpp"
 #include "hal/host/lockstep_clock.hpp"
 #include "hal/host/mem_can_bus.hpp"
 #include "hal/host/replay_sources.hpp"
+#include "tools/eval/async_outputs.hpp"
 
 namespace uwbnav::eval {
 namespace {
 
-// Collects what the firmware computed and streams it to the output files.
+// Collects what the firmware computed and hands it to the output writer.
 class ReplayObserver final : public AppObserver {
  public:
-  ReplayObserver(ReplayResult& result, bool keep, ReplaySink* sink) : result_(result), keep_(keep), sink_(sink) {}
-
-  Status open(const std::string& dir) {
-    if (dir.empty()) return Status::kOk;
-    writing_ = true;
-    if (!ok(est_.open(dir + "/estimates.csv"))) return Status::kIoError;
-    if (!ok(rng_.open(dir + "/ranges.csv"))) return Status::kIoError;
-    return Status::kOk;
-  }
-  Status close() {
-    if (!writing_) return Status::kOk;
-    const Status a = est_.close();
-    const Status b = rng_.close();
-    return ok(a) && ok(b) && !write_failed_ ? Status::kOk : Status::kIoError;
-  }
+  ReplayObserver(ReplayResult& result, bool keep, ReplaySink* sink, AsyncOutputWriter* out)
+      : result_(result), keep_(keep), sink_(sink), out_(out) {}
 
   void on_range(const RangeReport& r) override {
     if (r.used) {
@@ -43,7 +30,7 @@ class ReplayObserver final : public AppObserver {
       ++result_.ranges_rejected;
     }
     if (keep_) result_.ranges.push_back(r);
-    if (writing_ && !ok(rng_.write(r))) write_failed_ = true;
+    if (out_ != nullptr) out_->range(r);
   }
   void on_output(const NavOutput& o) override {
     ++result_.epochs;
@@ -53,17 +40,14 @@ class ReplayObserver final : public AppObserver {
       if (sink_ != nullptr) sink_->on_estimate(row);
       if (keep_) result_.estimates.push_back(row);
     }
-    if (writing_ && !ok(est_.write(o))) write_failed_ = true;
+    if (out_ != nullptr) out_->estimate(o);
   }
 
  private:
   ReplayResult& result_;
   bool keep_;
   ReplaySink* sink_;
-  bool writing_ = false;
-  bool write_failed_ = false;
-  dataset::EstimatesWriter est_;
-  dataset::RangesWriter rng_;
+  AsyncOutputWriter* out_;
 };
 
 // Hands out the rows of a streamed table as the loop reaches their time.
@@ -110,10 +94,16 @@ uint64_t first_time_us(const ImuSample* imu, const dataset::UwbRow* uwb) {
 // (0: unknown) only scales the progress line.
 Status run_loop(const SiteConfig& site, hal::ImuSource& imu, hal::UwbSource& uwb, uint64_t t0_us, uint64_t t_end_us,
                 const ReplayOptions& options, ReplayResult& result, std::string* error) {
+  const bool writing = !options.out_dir.empty();
+  AsyncOutputWriter outputs;
+  if (writing && !ok(outputs.open(options.out_dir, "can0"))) {
+    if (error) *error = "cannot write outputs to " + options.out_dir;
+    return Status::kIoError;
+  }
   hal::LockstepClock clock;
   hal::MemCanBus bus;
-  hal::CandumpLogWriter can_log;
-  hal::CanLogTee can(bus, can_log);
+  AsyncCanLogTee logged_bus(bus, outputs);
+  hal::CanBus& can = writing ? static_cast<hal::CanBus&>(logged_bus) : bus;
   hal::NullSerialPort serial;
   hal::EmptyParamStore store;
   hal::Board board{imu, uwb, can, serial, clock, store, site};
@@ -133,12 +123,7 @@ Status run_loop(const SiteConfig& site, hal::ImuSource& imu, hal::UwbSource& uwb
     }
   }
 
-  ReplayObserver observer(result, options.keep_in_memory, options.sink);
-  if (!ok(observer.open(options.out_dir)) ||
-      (!options.out_dir.empty() && !ok(can_log.open(options.out_dir + "/can.log", "can0")))) {
-    if (error) *error = "cannot write outputs to " + options.out_dir;
-    return Status::kIoError;
-  }
+  ReplayObserver observer(result, options.keep_in_memory, options.sink, writing ? &outputs : nullptr);
   app.set_observer(&observer);
 
   // Loop time on the 10 ms grid, starting at the cycle that holds the first sample.
@@ -168,9 +153,7 @@ Status run_loop(const SiteConfig& site, hal::ImuSource& imu, hal::UwbSource& uwb
   result.wall_s = std::chrono::duration<double>(wall1 - wall0).count();
   result.stats = app.stats();
   result.diag = app.navigator().diagnostics();
-  const Status closed = observer.close();
-  const Status log_closed = options.out_dir.empty() ? Status::kOk : can_log.close();
-  if (!ok(closed) || !ok(log_closed)) {
+  if (!ok(outputs.close())) {
     if (error) *error = "writing outputs to " + options.out_dir + " failed";
     return Status::kIoError;
   }
