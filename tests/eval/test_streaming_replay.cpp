@@ -201,11 +201,14 @@ TEST(StreamingReplay, StreamedTableEqualsTheWholeFileMetricsAndOutputsAreIdentic
   // WHEN the same directory is streamed with the table built on the fly
   dataset::RecordingStream stream;
   dataset::ReadReport sr;
-  ASSERT_EQ(stream.open(dir, sr), Status::kOk) << sr.error;
+  ASSERT_EQ(stream.open(dir, sr, false), Status::kOk) << sr.error;
+  // The builder runs on the output thread: readers (and reports) of its own.
   dataset::RowStream<dataset::UwbRow> summary_uwb;
-  dataset::ReadReport ur;
+  dataset::RowStream<dataset::TruthRow> truth;
+  dataset::ReadReport ur, tr;
   ASSERT_EQ(summary_uwb.open(dir, "uwb.csv", dataset::tables::kUwb, true, ur), Status::kOk);
-  SummaryBuilder builder(stream.site, stream.name(), summary_uwb, &stream.truth);
+  ASSERT_EQ(truth.open(dir, "truth.csv", dataset::tables::kTruth, true, tr), Status::kOk);
+  SummaryBuilder builder(stream.site, stream.name(), summary_uwb, &truth);
   ReplayOptions st_opt;
   st_opt.out_dir = scratch("out_stream");
   std::filesystem::create_directories(st_opt.out_dir);

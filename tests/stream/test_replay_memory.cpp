@@ -86,11 +86,13 @@ Peak streamed_replay(const std::string& dir) {
   {
     dataset::RecordingStream rec;
     dataset::ReadReport report;
-    EXPECT_EQ(rec.open(dir, report), Status::kOk) << report.error;
+    EXPECT_EQ(rec.open(dir, report, false), Status::kOk) << report.error;
     dataset::RowStream<dataset::UwbRow> summary_uwb;
-    dataset::ReadReport summary_report;
+    dataset::RowStream<dataset::TruthRow> truth;
+    dataset::ReadReport summary_report, truth_report;
     EXPECT_EQ(summary_uwb.open(dir, "uwb.csv", dataset::tables::kUwb, true, summary_report), Status::kOk);
-    SummaryBuilder summary(rec.site, rec.name(), summary_uwb, &rec.truth);
+    EXPECT_EQ(truth.open(dir, "truth.csv", dataset::tables::kTruth, true, truth_report), Status::kOk);
+    SummaryBuilder summary(rec.site, rec.name(), summary_uwb, &truth);
     ReplayOptions opt;
     opt.out_dir = out;
     opt.keep_in_memory = false;

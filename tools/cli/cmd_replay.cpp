@@ -32,21 +32,26 @@ int replay_and_report(const std::string& dir, const std::string& out, const Args
   if (!parse_param_options(args, who, &opt.params)) return 2;
   dataset::RecordingStream rec;
   dataset::ReadReport report;
-  if (!ok(rec.open(dir, report))) {
+  if (!ok(rec.open(dir, report, false))) {
     std::fprintf(stderr, "%s: cannot read recording %s: %s\n", who, dir.c_str(), report.error.c_str());
     dataset::print_warnings(report, stderr);
     return 1;
   }
   if (!apply_cal_option(args, rec.site, who)) return 1;
-  // The summary reads the ranges again through a reader of its own (its
-  // warnings repeat the replay's and are not shown).
+  // The result table is built on the replay's output thread from readers of
+  // its own: truth.csv (its warnings joined to the replay's afterwards) and
+  // uwb.csv again (its warnings repeat the replay's and are not shown).
+  dataset::RowStream<dataset::TruthRow> truth;
+  dataset::ReadReport truth_report;
   dataset::RowStream<dataset::UwbRow> summary_uwb;
   dataset::ReadReport summary_report;
-  if (!ok(summary_uwb.open(dir, "uwb.csv", dataset::tables::kUwb, true, summary_report))) {
-    std::fprintf(stderr, "%s: cannot read recording %s: %s\n", who, dir.c_str(), summary_report.error.c_str());
+  if (!ok(truth.open(dir, "truth.csv", dataset::tables::kTruth, false, truth_report)) ||
+      !ok(summary_uwb.open(dir, "uwb.csv", dataset::tables::kUwb, true, summary_report))) {
+    const std::string& why = truth_report.error.empty() ? summary_report.error : truth_report.error;
+    std::fprintf(stderr, "%s: cannot read recording %s: %s\n", who, dir.c_str(), why.c_str());
     return 1;
   }
-  eval::SummaryBuilder summary(rec.site, rec.name(), summary_uwb, rec.truth.present() ? &rec.truth : nullptr);
+  eval::SummaryBuilder summary(rec.site, rec.name(), summary_uwb, truth.present() ? &truth : nullptr);
   opt.sink = &summary;
   dataset::OutputDir out_dir;
   if (!out_dir.create(out)) {
@@ -61,7 +66,17 @@ int replay_and_report(const std::string& dir, const std::string& out, const Args
     return s == Status::kNotFound || s == Status::kOutOfRange ? 2 : 1;
   }
   const eval::RunSummary table = summary.finish(result);
-  const std::string read_error = rec.read_error();
+  std::string read_error = rec.read_error();
+  if (read_error.empty()) read_error = truth.error();
+  for (const auto& w : truth_report.warnings) {
+    if (report.warnings.size() < dataset::ReadReport::kMaxWarnings) {
+      report.warnings.push_back(w);
+    } else {
+      ++report.warnings_dropped;
+    }
+  }
+  report.warnings_dropped += truth_report.warnings_dropped;
+  report.rows_skipped += truth_report.rows_skipped;
   dataset::print_warnings(report, stderr);
   if (report.rows_skipped > 0) std::fprintf(stderr, "warning: %zu bad rows skipped\n", report.rows_skipped);
   if (!read_error.empty()) {

@@ -5,10 +5,12 @@ namespace uwbnav::eval {
 
 AsyncOutputWriter::~AsyncOutputWriter() { ignore_status(close()); }
 
-Status AsyncOutputWriter::open(const std::string& dir, const char* can_ifname) {
+Status AsyncOutputWriter::open(const std::string& dir, const char* can_ifname, ReplaySink* sink) {
   ignore_status(close());
-  if (!ok(est_.open(dir + "/estimates.csv")) || !ok(rng_.open(dir + "/ranges.csv")) ||
-      !ok(can_.open(dir + "/can.log", can_ifname))) {
+  files_ = !dir.empty();
+  sink_ = sink;
+  if (files_ && (!ok(est_.open(dir + "/estimates.csv")) || !ok(rng_.open(dir + "/ranges.csv")) ||
+                 !ok(can_.open(dir + "/can.log", can_ifname)))) {
     return Status::kIoError;
   }
   storage_.clear();
@@ -76,13 +78,14 @@ void AsyncOutputWriter::run() {
       Status s = Status::kOk;
       switch (r.kind) {
         case Kind::kEstimate:
-          s = est_.write(r.est);
+          if (sink_ != nullptr) sink_->on_estimate(to_estimate_row(r.est));
+          if (files_) s = est_.write(r.est);
           break;
         case Kind::kRange:
-          s = rng_.write(r.range);
+          if (files_) s = rng_.write(r.range);
           break;
         case Kind::kCan:
-          s = can_.write(r.frame);
+          if (files_) s = can_.write(r.frame);
           break;
       }
       if (!ok(s)) write_failed_ = true;

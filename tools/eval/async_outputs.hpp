@@ -1,6 +1,7 @@
-// Replay outputs (estimates.csv, ranges.csv, can.log) formatted and written on
-// a thread of their own, so the lockstep loop uses the second core instead of
-// waiting for number formatting and file I/O. Records travel in fixed-size
+// Replay outputs (estimates.csv, ranges.csv, can.log) formatted and written,
+// and the epochs handed to a ReplaySink (the result table built on the fly),
+// on a thread of their own, so the lockstep loop uses the second core instead
+// of waiting for number formatting, file I/O and the evaluation. Records travel in fixed-size
 // batches (kBatchRecords each, kBatches in all, allocated once): the memory is
 // fixed, nothing is ever dropped (the loop waits when all batches are in
 // flight), and each file receives its records in the order they were produced.
@@ -21,6 +22,7 @@
 #include "hal/hal.hpp"
 #include "hal/host/candump_log.hpp"
 #include "tools/dataset/recording.hpp"
+#include "tools/eval/replay.hpp"
 
 namespace uwbnav::eval {
 
@@ -35,8 +37,9 @@ class AsyncOutputWriter {
   AsyncOutputWriter& operator=(const AsyncOutputWriter&) = delete;
 
   // Creates dir/estimates.csv, dir/ranges.csv and dir/can.log (interface
-  // `can_ifname`) and starts the writer thread.
-  [[nodiscard]] Status open(const std::string& dir, const char* can_ifname);
+  // `can_ifname`; no files when `dir` is empty), remembers `sink` (may be
+  // null; it receives every epoch on the writer thread) and starts the thread.
+  [[nodiscard]] Status open(const std::string& dir, const char* can_ifname, ReplaySink* sink);
   void estimate(const NavOutput& out);
   void range(const RangeReport& report);
   void can(const hal::CanFrame& frame);
@@ -58,6 +61,8 @@ class AsyncOutputWriter {
   void hand_over();
   void run();
 
+  bool files_ = false;
+  ReplaySink* sink_ = nullptr;
   dataset::EstimatesWriter est_;
   dataset::RangesWriter rng_;
   hal::CandumpLogWriter can_;

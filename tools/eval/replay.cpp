@@ -20,8 +20,8 @@ namespace {
 // Collects what the firmware computed and hands it to the output writer.
 class ReplayObserver final : public AppObserver {
  public:
-  ReplayObserver(ReplayResult& result, bool keep, ReplaySink* sink, AsyncOutputWriter* out)
-      : result_(result), keep_(keep), sink_(sink), out_(out) {}
+  ReplayObserver(ReplayResult& result, bool keep, bool files, AsyncOutputWriter* out)
+      : result_(result), keep_(keep), files_(files), out_(out) {}
 
   void on_range(const RangeReport& r) override {
     if (r.used) {
@@ -30,24 +30,20 @@ class ReplayObserver final : public AppObserver {
       ++result_.ranges_rejected;
     }
     if (keep_) result_.ranges.push_back(r);
-    if (out_ != nullptr) out_->range(r);
+    if (files_) out_->range(r);
   }
   void on_output(const NavOutput& o) override {
     ++result_.epochs;
     if (o.status == NavStatus::kValid || o.status == NavStatus::kDegraded) ++result_.solution_epochs;
-    if (keep_ || sink_ != nullptr) {
-      const dataset::EstimateRow row = to_estimate_row(o);
-      if (sink_ != nullptr) sink_->on_estimate(row);
-      if (keep_) result_.estimates.push_back(row);
-    }
-    if (out_ != nullptr) out_->estimate(o);
+    if (keep_) result_.estimates.push_back(to_estimate_row(o));
+    if (out_ != nullptr) out_->estimate(o);  // to estimates.csv and the sink
   }
 
  private:
   ReplayResult& result_;
   bool keep_;
-  ReplaySink* sink_;
-  AsyncOutputWriter* out_;
+  bool files_;
+  AsyncOutputWriter* out_;  // null: neither files nor sink
 };
 
 // Hands out the rows of a streamed table as the loop reaches their time.
@@ -95,8 +91,9 @@ uint64_t first_time_us(const ImuSample* imu, const dataset::UwbRow* uwb) {
 Status run_loop(const SiteConfig& site, hal::ImuSource& imu, hal::UwbSource& uwb, uint64_t t0_us, uint64_t t_end_us,
                 const ReplayOptions& options, ReplayResult& result, std::string* error) {
   const bool writing = !options.out_dir.empty();
+  const bool async = writing || options.sink != nullptr;
   AsyncOutputWriter outputs;
-  if (writing && !ok(outputs.open(options.out_dir, "can0"))) {
+  if (async && !ok(outputs.open(options.out_dir, "can0", options.sink))) {
     if (error) *error = "cannot write outputs to " + options.out_dir;
     return Status::kIoError;
   }
@@ -123,7 +120,7 @@ Status run_loop(const SiteConfig& site, hal::ImuSource& imu, hal::UwbSource& uwb
     }
   }
 
-  ReplayObserver observer(result, options.keep_in_memory, options.sink, writing ? &outputs : nullptr);
+  ReplayObserver observer(result, options.keep_in_memory, writing, async ? &outputs : nullptr);
   app.set_observer(&observer);
 
   // Loop time on the 10 ms grid, starting at the cycle that holds the first sample.

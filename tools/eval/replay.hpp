@@ -19,7 +19,10 @@
 
 namespace uwbnav::eval {
 
-// Receives every output epoch of a replay as it is produced (streaming evaluation).
+// Receives every output epoch of a replay as it is produced (streaming
+// evaluation). Called on the replay's output thread, in epoch order, never
+// after run_replay returned: it must not share unguarded state with the
+// recording the loop reads (e.g. the ReadReport of its streams).
 class ReplaySink {
  public:
   virtual ~ReplaySink() = default;
@@ -32,7 +35,7 @@ struct ReplayOptions {
   bool keep_in_memory = true; // keep estimates/ranges in ReplayResult
   std::vector<std::pair<std::string, float>> params;  // overrides by name, applied after defaults
   bool progress = false;      // progress line on stderr for long runs
-  ReplaySink* sink = nullptr; // also receives every epoch (not owned)
+  ReplaySink* sink = nullptr; // also receives every epoch, on the output thread (not owned)
 };
 
 struct ReplayResult {
