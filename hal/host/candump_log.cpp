@@ -2,7 +2,8 @@
 #include "hal/host/candump_log.hpp"
 
 #include <cctype>
-#include <cinttypes>
+#include <cstdio>
+#include <string>
 
 namespace uwbnav::hal {
 namespace {
@@ -28,35 +29,64 @@ bool parse_hex_u32(const std::string& s, uint32_t& out) {
   return true;
 }
 
+// Writes `v` as `digits` decimal digits, zero-padded (v < 10^digits); returns the end.
+char* put_decimal(char* p, uint64_t v, int digits) {
+  for (int i = digits - 1; i >= 0; --i) {
+    p[i] = static_cast<char>('0' + v % 10U);
+    v /= 10U;
+  }
+  return p + digits;
+}
+
+// Writes the low `digits` hex digits of `v` (upper case); returns the end.
+char* put_hex(char* p, uint32_t v, int digits) {
+  for (int i = digits - 1; i >= 0; --i) *p++ = kHex[(v >> (4 * i)) & 0xFU];
+  return p;
+}
+
 }  // namespace
 
 std::string format_candump_line(const CanFrame& frame, const std::string& ifname, uint64_t epoch_offset_us) {
   const uint64_t t = epoch_offset_us + frame.t_us;
-  char head[48];
-  std::snprintf(head, sizeof(head), "(%010" PRIu64 ".%06" PRIu64 ") ", t / 1000000U, t % 1000000U);
-  std::string line = head;
-  line += ifname;
-  line += ' ';
-  char id[16];
-  if ((frame.flags & CanFrame::kFlagError) != 0) {
-    std::snprintf(id, sizeof(id), "%08" PRIX32, (frame.id & 0x1FFFFFFFU) | kCanErrFlag);
-  } else if ((frame.flags & CanFrame::kFlagExtended) != 0) {
-    std::snprintf(id, sizeof(id), "%08" PRIX32, frame.id & 0x1FFFFFFFU);
+  const uint64_t t_s = t / 1000000U;
+  std::string line;
+  line.reserve(48 + ifname.size() + 2 * 64);
+  line += '(';
+  if (t_s >= 10000000000ULL) {
+    line += std::to_string(t_s);  // wider than the usual 10 digits (as %010 prints it)
   } else {
-    std::snprintf(id, sizeof(id), "%03" PRIX32, frame.id & 0x7FFU);
+    char digits[10];
+    line.append(digits, put_decimal(digits, t_s, 10));
   }
-  line += id;
-  line += '#';
+  char buf[32 + 2 * 64];  // ".uuuuuu) " + id + "##F" + up to 64 data bytes in hex
+  char* p = buf;
+  *p++ = '.';
+  p = put_decimal(p, t % 1000000U, 6);
+  *p++ = ')';
+  *p++ = ' ';
+  line.append(buf, p);
+  line += ifname;
+  p = buf;
+  *p++ = ' ';
+  if ((frame.flags & CanFrame::kFlagError) != 0) {
+    p = put_hex(p, (frame.id & 0x1FFFFFFFU) | kCanErrFlag, 8);
+  } else if ((frame.flags & CanFrame::kFlagExtended) != 0) {
+    p = put_hex(p, frame.id & 0x1FFFFFFFU, 8);
+  } else {
+    p = put_hex(p, frame.id & 0x7FFU, 3);
+  }
+  *p++ = '#';
   const bool fd = (frame.flags & CanFrame::kFlagFd) != 0 && (frame.flags & CanFrame::kFlagError) == 0;
   const size_t len = frame.len > (fd ? 64U : 8U) ? (fd ? 64U : 8U) : frame.len;
   if (fd) {
-    line += '#';
-    line += kHex[(frame.flags & CanFrame::kFlagBrs) != 0 ? 1 : 0];
+    *p++ = '#';
+    *p++ = kHex[(frame.flags & CanFrame::kFlagBrs) != 0 ? 1 : 0];
   }
   for (size_t i = 0; i < len; ++i) {
-    line += kHex[frame.data[i] >> 4];
-    line += kHex[frame.data[i] & 0x0F];
+    *p++ = kHex[frame.data[i] >> 4];
+    *p++ = kHex[frame.data[i] & 0x0F];
   }
+  line.append(buf, p);
   return line;
 }
 
@@ -164,8 +194,9 @@ Status CandumpLogWriter::open(const std::string& path, const std::string& ifname
 
 Status CandumpLogWriter::write(const CanFrame& frame) {
   if (f_ == nullptr) return Status::kNotInitialised;
-  const std::string line = format_candump_line(frame, ifname_, epoch_offset_us_);
-  if (std::fprintf(f_, "%s\n", line.c_str()) < 0) return Status::kIoError;
+  std::string line = format_candump_line(frame, ifname_, epoch_offset_us_);
+  line += '\n';
+  if (std::fwrite(line.data(), 1, line.size(), f_) != line.size()) return Status::kIoError;
   ++lines_;
   return Status::kOk;
 }

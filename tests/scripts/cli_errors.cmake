@@ -69,6 +69,16 @@ maneuver = turn 90 3
     "-DARGS=replay|${cli_dir}/short_imu|--out|${cli_dir}/o_short" -DRC=3
     "-DERR=imu.csv: ends at t=[0-9.]+ s, [0-9.]+ s before uwb.csv .*input stream ended early")
 
+  # Streaming replay (issue 17): damage met mid-stream is still named with file and line.
+  cli_check(cli_replay_bad_row_mid_stream_names_file_and_line
+    "-DPREPARE=copy|${cli_dir}/rec|${cli_dir}/bad_row" "-DEDIT=replace_line|imu.csv|1000|abc,0,0,9.8,0,0,0"
+    "-DARGS=replay|${cli_dir}/bad_row|--out|${cli_dir}/o_bad_row" -DRC=0 "-DOUT=uwbnav EKF"
+    "-DERR=warning: imu.csv:1000: t_s: unparsable number 'abc'.*warning: 1 bad rows skipped")
+  cli_check(cli_eval_report_truncated_imu_exits_3_naming_the_stream
+    "-DPREPARE=copy|${cli_dir}/rec|${cli_dir}/short_imu_eval" "-DEDIT=truncate_half|imu.csv"
+    "-DARGS=eval|report|${cli_dir}/short_imu_eval|--out|${cli_dir}/o_short_eval|--no-figures|--jobs|1" -DRC=3
+    "-DERR=short_imu_eval: imu.csv: ends at t=[0-9.]+ s, [0-9.]+ s before uwb.csv .*input stream ended early")
+
   cli_check(cli_firmware_truncated_imu_warns_and_exits_3
     "-DPREPARE=copy|${cli_dir}/rec|${cli_dir}/short_imu_fw" "-DEDIT=truncate_half|imu.csv"
     "-DARGS=firmware|--recording|${cli_dir}/short_imu_fw|--console|none|--duration|0.5" -DRC=3

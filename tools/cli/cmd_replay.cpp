@@ -1,5 +1,6 @@
 // `uwbnav replay DIR --out OUT [--param name=value]... [--cal FILE]` and
-// `uwbnav run` (the main job: simulate the default scenario, replay it, print the table).
+// `uwbnav run` (the main job: simulate the default scenario, write it, replay it, print the table).
+// The replay streams the recording from its directory and computes the table on the fly.
 // Exit status: 0 a solution over complete input; 1 unreadable input or failure
 // (nothing left in OUT); 2 usage or parameter error; 3 the replay ran but
 // produced no solution or an input stream ended early (outputs kept).
@@ -10,6 +11,8 @@
 #include "tools/cli/cal_option.hpp"
 #include "tools/dataset/fs.hpp"
 #include "tools/dataset/recording.hpp"
+#include "tools/dataset/recording_stream.hpp"
+#include "tools/dataset/tables.hpp"
 #include "tools/eval/replay.hpp"
 #include "tools/eval/summary.hpp"
 #include "tools/sim/simulator.hpp"
@@ -19,18 +22,37 @@ namespace {
 
 constexpr int kExitIncomplete = 3;
 
-// Epochs whose output carries a position (status valid or degraded), with or without truth.
-size_t solution_epochs(const eval::ReplayResult& result) {
-  size_t n = 0;
-  for (const auto& e : result.estimates) n += (e.status == 1 || e.status == 2) ? 1U : 0U;
-  return n;
-}
-
-int replay_and_report(const dataset::Recording& rec, const std::string& out, const Args& args, const char* who) {
+// Streams the recording in `dir` through the firmware loop into `out`, with
+// the result table computed on the fly (memory independent of the length).
+int replay_and_report(const std::string& dir, const std::string& out, const Args& args, const char* who) {
   eval::ReplayOptions opt;
   opt.out_dir = out;
+  opt.keep_in_memory = false;
   opt.progress = args.has("--progress");
   if (!parse_param_options(args, who, &opt.params)) return 2;
+  dataset::RecordingStream rec;
+  dataset::ReadReport report;
+  if (!ok(rec.open(dir, report, false))) {
+    std::fprintf(stderr, "%s: cannot read recording %s: %s\n", who, dir.c_str(), report.error.c_str());
+    dataset::print_warnings(report, stderr);
+    return 1;
+  }
+  if (!apply_cal_option(args, rec.site, who)) return 1;
+  // The result table is built on the replay's output thread from readers of
+  // its own: truth.csv (its warnings joined to the replay's afterwards) and
+  // uwb.csv again (its warnings repeat the replay's and are not shown).
+  dataset::RowStream<dataset::TruthRow> truth;
+  dataset::ReadReport truth_report;
+  dataset::RowStream<dataset::UwbRow> summary_uwb;
+  dataset::ReadReport summary_report;
+  if (!ok(truth.open(dir, "truth.csv", dataset::tables::kTruth, false, truth_report)) ||
+      !ok(summary_uwb.open(dir, "uwb.csv", dataset::tables::kUwb, true, summary_report))) {
+    const std::string& why = truth_report.error.empty() ? summary_report.error : truth_report.error;
+    std::fprintf(stderr, "%s: cannot read recording %s: %s\n", who, dir.c_str(), why.c_str());
+    return 1;
+  }
+  eval::SummaryBuilder summary(rec.site, rec.name(), summary_uwb, truth.present() ? &truth : nullptr);
+  opt.sink = &summary;
   dataset::OutputDir out_dir;
   if (!out_dir.create(out)) {
     std::fprintf(stderr, "%s: cannot create %s\n", who, out.c_str());
@@ -43,19 +65,39 @@ int replay_and_report(const dataset::Recording& rec, const std::string& out, con
     std::fprintf(stderr, "%s: %s\n", who, err.c_str());
     return s == Status::kNotFound || s == Status::kOutOfRange ? 2 : 1;
   }
+  const eval::RunSummary table = summary.finish(result);
+  std::string read_error = rec.read_error();
+  if (read_error.empty()) read_error = truth.error();
+  for (const auto& w : truth_report.warnings) {
+    if (report.warnings.size() < dataset::ReadReport::kMaxWarnings) {
+      report.warnings.push_back(w);
+    } else {
+      ++report.warnings_dropped;
+    }
+  }
+  report.warnings_dropped += truth_report.warnings_dropped;
+  report.rows_skipped += truth_report.rows_skipped;
+  dataset::print_warnings(report, stderr);
+  if (report.rows_skipped > 0) std::fprintf(stderr, "warning: %zu bad rows skipped\n", report.rows_skipped);
+  if (!read_error.empty()) {
+    std::fprintf(stderr, "%s: cannot read recording %s: %s\n", who, dir.c_str(), read_error.c_str());
+    return 1;
+  }
   out_dir.keep();
-  eval::print_summary(stdout, eval::summarise(rec, result));
+  eval::print_summary(stdout, table);
   std::printf("outputs: %s/{estimates.csv, ranges.csv, can.log}\n", out.c_str());
   int rc = 0;
-  const size_t epochs = solution_epochs(result);
-  if (epochs == 0) {
-    std::fprintf(stderr, "%s: no solution: 0 of %zu epochs carry a position (%llu ranges used of %zu in uwb.csv)\n",
-                 who, result.estimates.size(), static_cast<unsigned long long>(result.ranges_used), rec.uwb.size());
+  if (result.solution_epochs == 0) {
+    std::fprintf(stderr, "%s: no solution: 0 of %llu epochs carry a position (%llu ranges used of %zu in uwb.csv)\n",
+                 who, static_cast<unsigned long long>(result.epochs),
+                 static_cast<unsigned long long>(result.ranges_used), rec.uwb.rows_delivered());
     rc = kExitIncomplete;
   }
-  for (const auto& line : dataset::streams_ended_early(rec)) {
-    std::fprintf(stderr, "%s: %s\n", who, line.c_str());
-    rc = kExitIncomplete;
+  if (rec.imu.rows_delivered() > 0 && rec.uwb.rows_delivered() > 0) {
+    for (const auto& line : dataset::streams_ended_early(rec.imu.last_t_us(), rec.uwb.last_t_us())) {
+      std::fprintf(stderr, "%s: %s\n", who, line.c_str());
+      rc = kExitIncomplete;
+    }
   }
   return rc;
 }
@@ -79,18 +121,7 @@ int cmd_replay(int argc, char** argv) {
   }
   std::vector<std::pair<std::string, float>> checked;
   if (!parse_param_options(args, "uwbnav replay", &checked)) return 2;
-  dataset::Recording rec;
-  dataset::ReadReport report;
-  if (!ok(dataset::read_recording(args.positional()[0], rec, report))) {
-    std::fprintf(stderr, "uwbnav replay: cannot read recording %s: %s\n", args.positional()[0].c_str(),
-                 report.error.c_str());
-    dataset::print_warnings(report, stderr);
-    return 1;
-  }
-  dataset::print_warnings(report, stderr);
-  if (report.rows_skipped > 0) std::fprintf(stderr, "warning: %zu bad rows skipped\n", report.rows_skipped);
-  if (!apply_cal_option(args, rec.site, "uwbnav replay")) return 1;
-  return replay_and_report(rec, args.get("--out"), args, "uwbnav replay");
+  return replay_and_report(args.positional()[0], args.get("--out"), args, "uwbnav replay");
 }
 
 int cmd_run(int argc, char** argv) {
@@ -121,8 +152,7 @@ int cmd_run(int argc, char** argv) {
   }
   std::printf("scenario %s (seed %llu): %zu IMU samples, %zu ranges -> %s\n", scenario.c_str(),
               static_cast<unsigned long long>(seed), rec.imu.size(), rec.uwb.size(), rec_dir.c_str());
-  if (!apply_cal_option(args, rec.site, "uwbnav run")) return 1;
-  const int rc = replay_and_report(rec, out, args, "uwbnav run");
+  const int rc = replay_and_report(rec_dir, out, args, "uwbnav run");
   if (rc != 1 && rc != 2) out_dir.keep();
   return rc;
 }

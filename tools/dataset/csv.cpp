@@ -2,6 +2,7 @@
 // bit-exact number writer used by every format v1 file.
 #include "tools/dataset/csv.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -54,15 +55,89 @@ void warn(ReadReport& report, const std::string& name, size_t line, const std::s
   }
 }
 
+void LineReader::view(const std::string& text) {
+  source_.reset();
+  buf_ = std::string();
+  data_ = text.data();
+  size_ = text.size();
+  pos_ = 0;
+  line_no_ = 0;
+  eof_ = true;
+}
+
+Status LineReader::open(const std::string& path) {
+  source_ = std::make_unique<TextSource>();
+  buf_.reserve(kChunk);
+  data_ = buf_.data();
+  size_ = 0;
+  pos_ = 0;
+  line_no_ = 0;
+  eof_ = false;
+  return source_->open(path);
+}
+
+const std::string& LineReader::error() const {
+  static const std::string kNone;
+  return source_ ? source_->error() : kNone;
+}
+
+// Moves the unread tail to the front of the buffer and reads more; grows the
+// buffer only when the tail (one unfinished line) already fills it.
+bool LineReader::refill() {
+  if (eof_) return false;
+  const size_t tail = size_ - pos_;
+  if (tail > 0 && pos_ > 0) std::memmove(&buf_[0], &buf_[pos_], tail);
+  size_t cap = std::max(buf_.capacity(), kChunk);
+  if (tail + kChunk / 4 > cap) cap *= 2;
+  buf_.resize(cap);
+  const size_t got = source_->read(&buf_[tail], cap - tail);
+  buf_.resize(tail + got);
+  data_ = buf_.data();
+  size_ = tail + got;
+  pos_ = 0;
+  if (got == 0) eof_ = true;
+  return got > 0;
+}
+
+bool LineReader::next(const char*& begin, const char*& end) {
+  const char* nl = nullptr;
+  for (;;) {
+    if (pos_ < size_) {
+      nl = static_cast<const char*>(std::memchr(data_ + pos_, '\n', size_ - pos_));
+      if (nl != nullptr) break;
+      // An unterminated last line counts only when the file was read to its
+      // end: after a read error it is a fragment, never a row.
+      if (eof_) {
+        if (!ok(status())) return false;
+        break;
+      }
+    } else if (eof_) {
+      return false;
+    }
+    if (!refill() && pos_ >= size_) return false;
+  }
+  const char* b = data_ + pos_;
+  const char* e = nl != nullptr ? nl : data_ + size_;
+  pos_ = static_cast<size_t>((nl != nullptr ? nl + 1 : e) - data_);
+  ++line_no_;
+  if (e > b && e[-1] == '\r') --e;  // CRLF line endings
+  if (line_no_ == 1 && e - b >= 3 && std::memcmp(b, "\xEF\xBB\xBF", 3) == 0) b += 3;  // UTF-8 BOM
+  begin = b;
+  end = e;
+  return true;
+}
+
 bool next_line(const std::string& text, size_t& pos, size_t& line_no, std::string& line) {
   if (pos >= text.size()) return false;
-  size_t nl = text.find('\n', pos);
-  if (nl == std::string::npos) nl = text.size();
-  line.assign(text, pos, nl - pos);
-  pos = nl + 1;
-  ++line_no;
-  if (!line.empty() && line.back() == '\r') line.pop_back();
-  if (line_no == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);
+  LineReader lines;
+  lines.view(text);
+  lines.skip_to(pos, line_no);
+  const char* b = nullptr;
+  const char* e = nullptr;
+  lines.next(b, e);
+  line.assign(b, e);
+  pos = lines.position();
+  line_no = lines.line();
   return true;
 }
 
@@ -83,29 +158,19 @@ std::string quote(const char* p, size_t n) {
   return s;
 }
 
-Table::Table(const std::string& text, std::string name) : text_(text), name_(std::move(name)) {}
-
-bool Table::next_line(const char*& begin, const char*& end) {
-  if (pos_ >= text_.size()) return false;
-  const char* base = text_.data();
-  const char* b = base + pos_;
-  const char* stop = base + text_.size();
-  const auto* nl = static_cast<const char*>(std::memchr(b, '\n', static_cast<size_t>(stop - b)));
-  const char* e = nl != nullptr ? nl : stop;
-  pos_ = static_cast<size_t>((nl != nullptr ? nl + 1 : stop) - base);
-  ++line_no_;
-  if (e > b && e[-1] == '\r') --e;  // CRLF line endings
-  if (line_no_ == 1 && e - b >= 3 && std::memcmp(b, "\xEF\xBB\xBF", 3) == 0) b += 3;  // UTF-8 BOM
-  begin = b;
-  end = e;
-  return true;
+Table::Table(const std::string& text, std::string name) : lines_(own_), name_(std::move(name)) {
+  own_.view(text);
 }
+
+Table::Table(LineReader& lines, std::string name) : lines_(lines), name_(std::move(name)) {}
 
 void Table::split(const char* begin, const char* end) {
   cells_.clear();
   const char* b = begin;
   for (;;) {
-    const auto* comma = static_cast<const char*>(std::memchr(b, ',', static_cast<size_t>(end - b)));
+    const char* comma = b;  // cells are short: a plain scan beats a memchr call per cell
+    while (comma < end && *comma != ',') ++comma;
+    if (comma == end) comma = nullptr;
     const char* e = comma != nullptr ? comma : end;
     const char* cb = b;
     const char* ce = e;
@@ -120,7 +185,8 @@ Status Table::header(const Columns& cols, std::string& error) {
   const char* b = nullptr;
   const char* e = nullptr;
   for (;;) {
-    if (!next_line(b, e)) return Status::kEmpty;
+    if (!lines_.next(b, e)) return Status::kEmpty;
+    line_no_ = lines_.line();
     const char* tb = b;
     const char* te = e;
     trim(tb, te);
@@ -157,7 +223,8 @@ bool Table::next_row() {
   const char* b = nullptr;
   const char* e = nullptr;
   for (;;) {
-    if (!next_line(b, e)) return false;
+    if (!lines_.next(b, e)) return false;
+    line_no_ = lines_.line();
     const char* tb = b;
     const char* te = e;
     trim(tb, te);
@@ -272,11 +339,17 @@ void Table::accept_time(uint64_t t_us) {
 }
 
 LineBuilder& LineBuilder::time(uint64_t t_us) {
-  char buf[48];
-  const int n = std::snprintf(buf, sizeof buf, "%llu.%06llu",
-                              static_cast<unsigned long long>(t_us / 1000000U),
-                              static_cast<unsigned long long>(t_us % 1000000U));
-  s_.append(buf, static_cast<size_t>(n));
+  char buf[24];
+  const auto r = std::to_chars(buf, buf + sizeof buf, t_us / 1000000U);
+  s_.append(buf, r.ptr);
+  uint64_t frac = t_us % 1000000U;
+  char digits[7];
+  digits[0] = '.';
+  for (int i = 6; i >= 1; --i) {
+    digits[i] = static_cast<char>('0' + frac % 10U);
+    frac /= 10U;
+  }
+  s_.append(digits, sizeof digits);
   return *this;
 }
 

@@ -1,16 +1,20 @@
-// Internal CSV machinery of format v1 (docs/dataset-format.md): a table reader
-// that checks the header, skips comments and splits rows into strictly parsed
-// cells, and a line builder that writes numbers which read back bit-exactly.
+// Internal CSV machinery of format v1 (docs/dataset-format.md): the line
+// walker (over text in memory or streamed from a plain/gzip file with a fixed
+// buffer), a table reader that checks the header, skips comments and splits
+// rows into strictly parsed cells, and a line builder that writes numbers
+// which read back bit-exactly.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "estimator/status.hpp"
 #include "tools/dataset/recording.hpp"
+#include "tools/dataset/text_source.hpp"
 
 namespace uwbnav::dataset::csv {
 
@@ -30,20 +34,74 @@ struct Columns {
 // `report`, respecting the cap.
 void warn(ReadReport& report, const std::string& name, size_t line, const std::string& reason);
 
-// The next physical line of `text` from `pos` (advanced past it) with a
-// trailing CR and, on line 1, a UTF-8 byte-order mark removed; `line_no`
-// counts from 1. False at the end of the text.
+// The line walker of every format v1 file: yields the physical lines of a
+// text held in memory (view) or streamed from a file (open; plain or .gz),
+// each without its '\n', a trailing CR and, on line 1, a UTF-8 byte-order
+// mark. Streaming keeps one fixed buffer (kChunk bytes, grown only for a
+// single line longer than that), so its memory does not depend on the
+// number of lines.
+class LineReader {
+ public:
+  static constexpr size_t kChunk = 1U << 16;  // bytes read per refill
+
+  LineReader() = default;
+  LineReader(const LineReader&) = delete;
+  LineReader& operator=(const LineReader&) = delete;
+
+  // Walks `text` in place (it must outlive the reader).
+  void view(const std::string& text);
+  // Streams `path` (or `path`.gz, see TextSource::open).
+  [[nodiscard]] Status open(const std::string& path);
+
+  // The next line as [begin, end), valid until the next call; `line()`
+  // counts from 1. False at the end of the text or on a read error (status()).
+  bool next(const char*& begin, const char*& end);
+
+  size_t line() const { return line_no_; }
+  // View mode: resume at byte `pos` of the text, `line_no` lines already walked.
+  void skip_to(size_t pos, size_t line_no) {
+    pos_ = pos;
+    line_no_ = line_no;
+  }
+  // View mode: byte offset of the next line.
+  size_t position() const { return pos_; }
+  // kOk, or kIoError after a read error / truncated or corrupt .gz (error() says why).
+  Status status() const { return source_ ? source_->status() : Status::kOk; }
+  const std::string& error() const;
+  // Bytes currently held for lines (the streaming buffer's capacity).
+  size_t buffer_bytes() const { return buf_.capacity(); }
+
+ private:
+  bool refill();
+
+  const char* data_ = nullptr;  // view: the text; stream: buf_.data()
+  size_t size_ = 0;             // bytes valid at data_
+  size_t pos_ = 0;              // start of the next line
+  size_t line_no_ = 0;
+  std::unique_ptr<TextSource> source_;  // set when streaming
+  std::string buf_;
+  bool eof_ = false;
+};
+
+// The next physical line of `text` from `pos` (advanced past it), as
+// LineReader yields it; `line_no` counts from 1. False at the end of the text.
 bool next_line(const std::string& text, size_t& pos, size_t& line_no, std::string& line);
 
 // Printable, truncated copy of raw file bytes for messages.
 std::string quote(const char* p, size_t n);
 
-// Walks the rows of one table held in memory. Usage: header(), then
-// next_row() until false; inside a row, the parse_* calls return false and set
-// reason() when the cell is malformed.
+// Walks the rows of one table, held in memory or streamed (LineReader).
+// Usage: header(), then next_row() until false; inside a row, the parse_*
+// calls return false and set reason() when the cell is malformed. Only the
+// current row is held.
 class Table {
  public:
+  // Over `text` in memory (it must outlive the table).
   Table(const std::string& text, std::string name);
+  // Streamed from `lines` (already opened; it must outlive the table).
+  Table(LineReader& lines, std::string name);
+  Table(const Table&) = delete;
+  Table& operator=(const Table&) = delete;
 
   // Finds the header (first line that is neither blank nor a '#' comment) and
   // checks it against `cols`. kOk: columns() set. kEmpty: no header line at
@@ -78,14 +136,13 @@ class Table {
   const std::string& reason() const { return reason_; }
 
  private:
-  bool next_line(const char*& begin, const char*& end);
   void split(const char* begin, const char* end);
   void cell(size_t col, const char*& b, const char*& e) const;
   bool fail(size_t col, const char* what);
 
-  const std::string& text_;
+  LineReader own_;      // the reader of a table held in memory
+  LineReader& lines_;   // own_ or the caller's streaming reader
   std::string name_;
-  size_t pos_ = 0;
   size_t line_no_ = 0;
   std::vector<std::string> names_;
   std::vector<std::pair<const char*, const char*>> cells_;

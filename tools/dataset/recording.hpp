@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,10 @@
 #include "estimator/types.hpp"
 
 namespace uwbnav::dataset {
+
+namespace csv {
+class LineBuilder;
+}
 
 // One uwb.csv row: the range plus its evaluation-only label.
 struct UwbRow {
@@ -39,6 +44,9 @@ struct Recording {
   std::string name() const;                 // meta "name" or the directory's last component
 };
 
+// Meta "name" or the directory's last component.
+std::string recording_name(const std::map<std::string, std::string>& meta, const std::string& dir);
+
 // What the reader skipped, for the warning lines and the tests.
 struct ReadReport {
   size_t rows_read = 0;       // data rows accepted over all files
@@ -52,7 +60,8 @@ struct ReadReport {
 // Prints the warnings (and how many were dropped) one per line to `out`.
 void print_warnings(const ReadReport& report, std::FILE* out);
 
-// Reads a format v1 directory. Bad rows (unparsable, NaN/Inf, wrong column
+// Reads a format v1 directory whole (for the streaming reader see
+// recording_stream.hpp, which this is built on). Bad rows (unparsable, NaN/Inf, wrong column
 // count, backwards time, negative ids) are skipped, counted and warned about
 // with file and line number; they never reach `out`. Fails (non-kOk) only when
 // a required file is missing/unreadable, a header is wrong, or anchors.csv
@@ -67,6 +76,8 @@ void print_warnings(const ReadReport& report, std::FILE* out);
 // "imu.csv: ends at t=30.000 s, 29.990 s before uwb.csv (last 59.990 s): input stream ended early".
 constexpr uint64_t kStreamEndToleranceUs = 1000000;
 std::vector<std::string> streams_ended_early(const Recording& rec);
+// The same from the last timestamps of both streams (both present and non-empty).
+std::vector<std::string> streams_ended_early(uint64_t imu_end_us, uint64_t uwb_end_us);
 
 // Writes `rec` as a format v1 directory (creating it). Floats are written with
 // enough digits to round-trip the estimator's input exactly.
@@ -75,7 +86,7 @@ std::vector<std::string> streams_ended_early(const Recording& rec);
 // Streaming writers for the replay outputs (estimates.csv, ranges.csv).
 class EstimatesWriter {
  public:
-  EstimatesWriter() = default;
+  EstimatesWriter();
   ~EstimatesWriter();
   EstimatesWriter(const EstimatesWriter&) = delete;
   EstimatesWriter& operator=(const EstimatesWriter&) = delete;
@@ -85,11 +96,12 @@ class EstimatesWriter {
 
  private:
   std::FILE* f_ = nullptr;
+  std::unique_ptr<csv::LineBuilder> line_;  // reused for every row
 };
 
 class RangesWriter {
  public:
-  RangesWriter() = default;
+  RangesWriter();
   ~RangesWriter();
   RangesWriter(const RangesWriter&) = delete;
   RangesWriter& operator=(const RangesWriter&) = delete;
@@ -100,6 +112,7 @@ class RangesWriter {
 
  private:
   std::FILE* f_ = nullptr;
+  std::unique_ptr<csv::LineBuilder> line_;  // reused for every row
 };
 
 // Readers for replay outputs (evaluation, tests). Rows that do not parse are skipped and counted.

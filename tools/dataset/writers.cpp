@@ -209,6 +209,8 @@ Status write_recording(const std::string& dir, const Recording& rec) {
   return write_meta(dir + "/meta.ini", rec);
 }
 
+EstimatesWriter::EstimatesWriter() : line_(std::make_unique<csv::LineBuilder>()) {}
+
 EstimatesWriter::~EstimatesWriter() { ignore_status(close()); }
 
 Status EstimatesWriter::open(const std::string& path) {
@@ -222,7 +224,7 @@ Status EstimatesWriter::open(const std::string& path) {
 
 Status EstimatesWriter::write(const NavOutput& out) {
   if (f_ == nullptr) return Status::kNotInitialised;
-  csv::LineBuilder l;
+  csv::LineBuilder& l = *line_;
   l.time(out.t_us);
   l.sep().f32(out.pos_nav_m.x).sep().f32(out.pos_nav_m.y).sep().f32(out.pos_nav_m.z);
   l.sep().f32(out.vel_nav_mps.x).sep().f32(out.vel_nav_mps.y).sep().f32(out.vel_nav_mps.z);
@@ -239,6 +241,8 @@ Status EstimatesWriter::close() {
   return st;
 }
 
+RangesWriter::RangesWriter() : line_(std::make_unique<csv::LineBuilder>()) {}
+
 RangesWriter::~RangesWriter() { ignore_status(close()); }
 
 Status RangesWriter::open(const std::string& path) {
@@ -252,7 +256,7 @@ Status RangesWriter::open(const std::string& path) {
 
 Status RangesWriter::write(const RangeReport& r) {
   if (f_ == nullptr) return Status::kNotInitialised;
-  csv::LineBuilder l;
+  csv::LineBuilder& l = *line_;
   l.time(r.t_us).sep().u64(r.anchor_id).sep().u64(r.tag_id).sep().f32(r.range_m);
   l.sep().f32(r.innovation_m).sep().f32(r.p_svm).sep().f32(r.p_mc).sep().f32(r.p_fused);
   l.sep().u64(r.nlos ? 1U : 0U).sep().u64(r.used ? 1U : 0U);

@@ -101,4 +101,75 @@ AccuracyStats accuracy(const std::vector<ErrorSample>& errors, size_t epochs_tot
   return st;
 }
 
+void interpolate(const dataset::TruthRow& a, const dataset::TruthRow& b, uint64_t t_us, double pos_nav_m[3]) {
+  const double w = static_cast<double>(t_us - a.t_us) / static_cast<double>(b.t_us - a.t_us);
+  for (int k = 0; k < 3; ++k) pos_nav_m[k] = a.pos_nav_m[k] + w * (b.pos_nav_m[k] - a.pos_nav_m[k]);
+}
+
+bool TruthCursor::bracket(uint64_t t_us, const dataset::TruthRow*& before, const dataset::TruthRow*& at) {
+  at = nullptr;
+  before = nullptr;
+  if (feed_ == nullptr) return false;
+  while (feed_->peek() != nullptr && feed_->peek()->t_us < t_us) {
+    have_prev_ = feed_->next(prev_);
+  }
+  at = feed_->peek();
+  if (at == nullptr) return false;  // after the last row (or no truth)
+  if (at->t_us == t_us) return true;
+  if (!have_prev_ || at->t_us - prev_.t_us > max_gap_us_) return false;  // before the first row, or a gap
+  before = &prev_;
+  return true;
+}
+
+bool TruthCursor::position(uint64_t t_us, double pos_nav_m[3]) {
+  const dataset::TruthRow* a = nullptr;
+  const dataset::TruthRow* b = nullptr;
+  if (!bracket(t_us, a, b)) return false;
+  if (a == nullptr) {
+    for (int k = 0; k < 3; ++k) pos_nav_m[k] = b->pos_nav_m[k];
+  } else {
+    interpolate(*a, *b, t_us, pos_nav_m);
+  }
+  return true;
+}
+
+void AccuracyAccumulator::add(const ErrorSample& e) {
+  const double h = std::hypot(e.err_nav_m[0], e.err_nav_m[1]);
+  ++n_;
+  sum_h2_ += h * h;
+  const double delta = h - mean_h_m_;
+  mean_h_m_ += delta / static_cast<double>(n_);
+  m2_h_ += delta * (h - mean_h_m_);
+  max_h_m_ = std::max(max_h_m_, h);
+  if (std::isfinite(e.sigma_nav_m[0]) && std::isfinite(e.sigma_nav_m[1])) {
+    ++with_sigma_;
+    if (std::fabs(e.err_nav_m[0]) <= 2.0 * e.sigma_nav_m[0]) ++in_x_;
+    if (std::fabs(e.err_nav_m[1]) <= 2.0 * e.sigma_nav_m[1]) ++in_y_;
+  }
+}
+
+AccuracyStats AccuracyAccumulator::stats(size_t epochs_total) const {
+  AccuracyStats st;
+  st.epochs = n_;
+  st.epochs_total = epochs_total;
+  const double nan = std::nan("");
+  st.p50_east_m = st.p70_east_m = st.p90_east_m = nan;
+  st.p50_north_m = st.p70_north_m = st.p90_north_m = nan;
+  if (n_ == 0) {
+    st.rmse_h_m = st.max_h_m = st.std_h_m = st.mean_h_m = nan;
+    st.inside_2sigma_x = st.inside_2sigma_y = nan;
+    return st;
+  }
+  const double n = static_cast<double>(n_);
+  st.rmse_h_m = std::sqrt(sum_h2_ / n);
+  st.mean_h_m = mean_h_m_;
+  st.std_h_m = std::sqrt(m2_h_ / n);
+  st.max_h_m = max_h_m_;
+  if (with_sigma_ > 0) {
+    st.inside_2sigma_x = static_cast<double>(in_x_) / static_cast<double>(with_sigma_);
+    st.inside_2sigma_y = static_cast<double>(in_y_) / static_cast<double>(with_sigma_);
+  }
+  return st;
+}
+
 }  // namespace uwbnav::eval

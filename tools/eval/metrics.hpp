@@ -1,5 +1,7 @@
 // Accuracy metrics against truth (seed 000 eq. 14-16): horizontal RMSE, MAX,
-// STD, per-axis error percentiles, and the share of errors inside the claimed 2-sigma.
+// STD, per-axis error percentiles, and the share of errors inside the claimed
+// 2-sigma; whole-vector functions and their streaming counterparts (a truth
+// cursor and a fixed-size accumulator) for evaluation on the fly.
 #pragma once
 
 #include <cstddef>
@@ -7,6 +9,7 @@
 #include <vector>
 
 #include "tools/dataset/recording.hpp"
+#include "tools/dataset/recording_stream.hpp"
 
 namespace uwbnav::eval {
 
@@ -44,5 +47,46 @@ AccuracyStats accuracy(const std::vector<ErrorSample>& errors, size_t epochs_tot
 
 // q-quantile (0..1) of values (copied and partially sorted).
 double quantile(std::vector<double> values, double q);
+
+// Truth at increasing times from rows pulled one by one out of a feed: the
+// same answers as truth_at() over the whole table, holding two rows.
+class TruthCursor {
+ public:
+  // `feed` null: no truth (every query false).
+  explicit TruthCursor(dataset::RowFeed<dataset::TruthRow>* feed, uint64_t max_gap_us = 200000)
+      : feed_(feed), max_gap_us_(max_gap_us) {}
+  // The truth rows bracketing `t_us`: `before` the last row earlier than t_us
+  // (null when none or when `at` is exact), `at` the first row at or after it.
+  // False where truth_at() is false. Calls must come with non-decreasing t_us.
+  bool bracket(uint64_t t_us, const dataset::TruthRow*& before, const dataset::TruthRow*& at);
+  // truth_at() for the body origin.
+  bool position(uint64_t t_us, double pos_nav_m[3]);
+
+ private:
+  dataset::RowFeed<dataset::TruthRow>* feed_;
+  uint64_t max_gap_us_;
+  dataset::TruthRow prev_{};
+  bool have_prev_ = false;
+};
+
+// Linear interpolation between two truth positions at t_us (a.t_us < t_us < b.t_us).
+void interpolate(const dataset::TruthRow& a, const dataset::TruthRow& b, uint64_t t_us, double pos_nav_m[3]);
+
+// AccuracyStats of errors fed one at a time, in constant memory. Percentiles
+// are not kept (NaN in stats()); every other field as accuracy().
+class AccuracyAccumulator {
+ public:
+  void add(const ErrorSample& e);
+  AccuracyStats stats(size_t epochs_total) const;
+  size_t epochs() const { return n_; }
+
+ private:
+  size_t n_ = 0;
+  double sum_h2_ = 0.0;   // sum of squared horizontal errors [m^2]
+  double mean_h_m_ = 0.0; // running mean of the horizontal error (Welford)
+  double m2_h_ = 0.0;     // running sum of squared deviations from the mean [m^2]
+  double max_h_m_ = 0.0;
+  size_t in_x_ = 0, in_y_ = 0, with_sigma_ = 0;
+};
 
 }  // namespace uwbnav::eval

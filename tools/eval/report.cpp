@@ -384,7 +384,9 @@ int run_eval_report(int argc, char** argv) {
   }
   if (specs.empty() || out.empty()) {
     std::fprintf(stderr, "usage: uwbnav eval report RECORDING... --out DIR [--jobs N] [--no-figures]\n"
-                         "  RECORDING: a format v1 directory, or sim:PRESET[:SEED]\n");
+                         "  RECORDING: a format v1 directory, or sim:PRESET[:SEED]\n"
+                         "  exit status: 0 every recording evaluated over complete input, 1 a recording could not be\n"
+                         "  evaluated, 2 usage error, 3 an input stream ended early (e.g. a truncated imu.csv; tables written)\n");
     return 2;
   }
   dataset::OutputDir out_dir;  // removed again when no recording could be evaluated
@@ -464,11 +466,22 @@ int run_eval_report(int argc, char** argv) {
     }
   }
   std::fclose(md);
+  // An input stream that ended early (a truncated imu.csv, a sensor that died)
+  // leaves the tables standing but the run incomplete: exit 3, as `uwbnav replay`.
+  size_t incomplete = 0;
+  for (size_t i = 0; i < specs.size(); ++i) {
+    if (reports[i].methods.empty()) continue;
+    for (const auto& line : dataset::streams_ended_early(recs[i])) {
+      std::fprintf(stderr, "uwbnav eval report: %s: %s\n", specs[i].c_str(), line.c_str());
+      ++incomplete;
+    }
+  }
   if (static_cast<size_t>(failures) < specs.size()) out_dir.keep();
   const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("eval report: %zu recording(s), %d failed, %.1f s -> %s/results.md\n", specs.size(), failures, el,
               out.c_str());
-  return failures == 0 ? 0 : 1;
+  if (failures > 0) return 1;
+  return incomplete > 0 ? 3 : 0;
 }
 
 }  // namespace uwbnav::eval

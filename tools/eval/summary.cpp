@@ -1,18 +1,83 @@
 // Result table of a replay (see summary.hpp).
 #include "tools/eval/summary.hpp"
 
-#include "tools/eval/baselines.hpp"
-
-#include <vector>
+#include <cstdint>
+#include <utility>
 
 namespace uwbnav::eval {
 
-RunSummary summarise(const dataset::Recording& rec, const ReplayResult& result) {
+namespace {
+
+ErrorSample error_of(const dataset::EstimateRow& e, const double truth_nav_m[3]) {
+  ErrorSample s;
+  s.t_us = e.t_us;
+  s.status = e.status;
+  for (int k = 0; k < 3; ++k) {
+    s.err_nav_m[k] = e.pos_nav_m[k] - truth_nav_m[k];
+    s.sigma_nav_m[k] = e.pos_sigma_m[k];
+  }
+  return s;
+}
+
+}  // namespace
+
+SummaryBuilder::SummaryBuilder(const SiteConfig& site, std::string name, dataset::RowFeed<dataset::UwbRow>& uwb,
+                               dataset::RowFeed<dataset::TruthRow>* truth)
+    : site_(site),
+      name_(std::move(name)),
+      uwb_(uwb),
+      has_truth_(truth != nullptr && truth->peek() != nullptr),
+      truth_(truth),
+      ls_(site, LsMethod::kLinear, [this](const dataset::EstimateRow& fix) { on_ls_fix(fix); }) {}
+
+void SummaryBuilder::take_ranges_up_to(uint64_t t_us) {
+  dataset::UwbRow row;
+  while (uwb_.peek() != nullptr && uwb_.peek()->range.t_us <= t_us && uwb_.next(row)) {
+    nlos_labelled_ += row.nlos_label == 1 ? 1 : 0;
+    if (has_truth_) ls_.add(row.range);
+  }
+}
+
+// LS epochs reach here before any filter epoch of a later time, so the truth
+// cursor sees non-decreasing times.
+void SummaryBuilder::on_ls_fix(const dataset::EstimateRow& fix) {
+  const dataset::TruthRow* a = nullptr;
+  const dataset::TruthRow* b = nullptr;
+  if (!truth_.bracket(fix.t_us, a, b)) return;
+  double p[3];
+  const dataset::TruthRow tb = tag_truth_row(site_, *b);
+  if (a == nullptr) {
+    for (int k = 0; k < 3; ++k) p[k] = tb.pos_nav_m[k];
+  } else {
+    interpolate(tag_truth_row(site_, *a), tb, fix.t_us, p);
+  }
+  ls_acc_.add(error_of(fix, p));
+}
+
+void SummaryBuilder::on_estimate(const dataset::EstimateRow& e) {
+  take_ranges_up_to(e.t_us);
+  if (!has_truth_) return;
+  ls_.advance_to(e.t_us);
+  double p[3];
+  if (!truth_.position(e.t_us, p)) return;
+  ++epochs_in_truth_;
+  if (e.status != 1 && e.status != 2) return;  // valid or degraded only
+  const ErrorSample err = error_of(e, p);
+  filter_.add(err);
+  // The same epochs split by the mode that published them (availability: share of all epochs).
+  if (e.mode == static_cast<int>(NavMode::kNone)) return;
+  (e.mode == static_cast<int>(NavMode::kInertial) ? inertial_ : fallback_).add(err);
+}
+
+RunSummary SummaryBuilder::finish(const ReplayResult& result) {
+  take_ranges_up_to(UINT64_MAX);
+  if (has_truth_) ls_.finish();
   RunSummary s;
-  s.name = rec.name();
-  s.has_truth = !rec.truth.empty();
+  s.name = name_;
+  s.has_truth = has_truth_;
   s.ranges_used = result.ranges_used;
   s.ranges_rejected = result.ranges_rejected;
+  s.ranges_nlos_labelled = nlos_labelled_;
   s.input = result.stats;
   s.imu_rejected = result.stats.imu.rejected_total();
   s.uwb_rejected = result.stats.uwb.rejected_total();
@@ -20,26 +85,21 @@ RunSummary summarise(const dataset::Recording& rec, const ReplayResult& result) 
   s.wall_s = result.wall_s;
   s.resets = result.diag.resets;
   s.reinits = result.diag.reinits;
-  for (const auto& u : rec.uwb) s.ranges_nlos_labelled += u.nlos_label == 1 ? 1 : 0;
-  if (s.has_truth) {
-    size_t total = 0;
-    for (const auto& e : result.estimates) {
-      double p[3];
-      if (truth_at(rec.truth, e.t_us, p)) ++total;
-    }
-    s.filter = accuracy(compare_with_truth(result.estimates, rec.truth), total);
-    // The same epochs split by the mode that published them (availability: share of all epochs).
-    std::vector<dataset::EstimateRow> by_mode[2];
-    for (const auto& e : result.estimates) {
-      if (e.mode == static_cast<int>(NavMode::kNone)) continue;
-      by_mode[e.mode == static_cast<int>(NavMode::kInertial) ? 0 : 1].push_back(e);
-    }
-    s.inertial = accuracy(compare_with_truth(by_mode[0], rec.truth), total);
-    s.fallback = accuracy(compare_with_truth(by_mode[1], rec.truth), total);
-    const auto ls = ls_baseline(rec, LsMethod::kLinear);
-    s.ls_uwb = accuracy(compare_with_truth(ls, tag_truth(rec)), total);
+  if (has_truth_) {
+    s.filter = filter_.stats(epochs_in_truth_);
+    s.inertial = inertial_.stats(epochs_in_truth_);
+    s.fallback = fallback_.stats(epochs_in_truth_);
+    s.ls_uwb = ls_acc_.stats(epochs_in_truth_);
   }
   return s;
+}
+
+RunSummary summarise(const dataset::Recording& rec, const ReplayResult& result) {
+  dataset::VectorFeed<dataset::UwbRow> uwb(rec.uwb);
+  dataset::VectorFeed<dataset::TruthRow> truth(rec.truth);
+  SummaryBuilder builder(rec.site, rec.name(), uwb, &truth);
+  for (const auto& e : result.estimates) builder.on_estimate(e);
+  return builder.finish(result);
 }
 
 void print_summary(std::FILE* f, const RunSummary& s) {
