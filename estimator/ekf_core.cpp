@@ -148,11 +148,19 @@ void EkfCore::predict_cv(Real dt_s, Real accel_psd, Real yaw_psd, Real vel_tau_s
   if (turn_psd > Real(0) && dt_s > Real(0)) {
     // Turn rate: attitude and gyro bias blocks of predict_imu with a zero
     // gyro reading (w = -b_g; Phi_att,bg = -C dt), independent of (p, v).
+    // Only b_g,z carries variance here (cv_start_turn_rate), so Phi_att,bg
+    // reduces to its third column: row and column updates with one vector.
     const Vec3 w_body = -x_.bg_body_radps;
     x_.q_nav_body = quat_normalised(quat_mul(x_.q_nav_body, quat_exp(w_body * dt_s)));
-    const Mat3 phi_abg = c_nav_body_ * (-dt_s);
-    p_.middleRows<3>(A) += phi_abg * p_.middleRows<3>(BG);
-    p_.middleCols<3>(A) += p_.middleCols<3>(BG) * phi_abg.transpose();
+    const Vec3 phi_z = c_nav_body_.col(2) * (-dt_s);
+    // Plain loops (not Eigen row expressions, which unroll over the whole
+    // state and cost flash on the M4F): all rows first, then all columns.
+    for (int i = 0; i < 3; ++i) {
+      for (int k = 0; k < kN; ++k) p_(A + i, k) += phi_z(i) * p_(BG + 2, k);
+    }
+    for (int i = 0; i < 3; ++i) {
+      for (int k = 0; k < kN; ++k) p_(k, A + i) += phi_z(i) * p_(k, BG + 2);
+    }
     p_(BG + 2, BG + 2) += turn_psd * turn_psd * dt_s;
     refresh_dcm();
   }
@@ -161,15 +169,46 @@ void EkfCore::predict_cv(Real dt_s, Real accel_psd, Real yaw_psd, Real vel_tau_s
   x_.vel_nav_mps *= st.f_vv;
   p_(A + 2, A + 2) += yaw_psd * yaw_psd * dt_s;
   // P <- F P F^T with F = [I f_pv I; 0 f_vv I] on (p, v): rows, then columns.
-  p_.middleRows<3>(P) += st.f_pv * p_.middleRows<3>(V);
-  p_.middleRows<3>(V) *= st.f_vv;
-  p_.middleCols<3>(P) += st.f_pv * p_.middleCols<3>(V);
-  p_.middleCols<3>(V) *= st.f_vv;
+  // (Plain loops: see the turn-rate block.)
+  for (int i = 0; i < 3; ++i) {
+    for (int k = 0; k < kN; ++k) {
+      p_(P + i, k) += st.f_pv * p_(V + i, k);
+      p_(V + i, k) *= st.f_vv;
+    }
+  }
+  for (int i = 0; i < 3; ++i) {
+    for (int k = 0; k < kN; ++k) {
+      p_(k, P + i) += st.f_pv * p_(k, V + i);
+      p_(k, V + i) *= st.f_vv;
+    }
+  }
   for (int i = 0; i < 3; ++i) {
     p_(P + i, P + i) += st.q_pp;
     p_(P + i, V + i) += st.q_pv;
     p_(V + i, P + i) += st.q_pv;
     p_(V + i, V + i) += st.q_vv;
+  }
+}
+
+void EkfCore::predict_level(Real dt_s, Real sigma_rad, Real tau_s) {
+  if (!(dt_s > Real(0)) || !(tau_s > Real(0))) return;
+  const Real phi = std::exp(-dt_s / tau_s);
+  const Vec3 z_body_nav = c_nav_body_.col(2);
+  const Vec3 axis(-z_body_nav.y(), z_body_nav.x(), Real(0));  // e_z x z_body
+  const Real s = axis.norm();
+  if (s > Real(1e-9)) {
+    // Left multiplication = nav-frame rotation, as the attitude error.
+    const Real tilt = std::atan2(s, z_body_nav.z());
+    x_.q_nav_body = quat_normalised(quat_mul(quat_exp(axis * (-(Real(1) - phi) * tilt / s)), x_.q_nav_body));
+    refresh_dcm();
+  }
+  const Real q = sigma_rad * sigma_rad * (Real(1) - phi * phi);
+  for (int i = 0; i < 2; ++i) {
+    for (int k = 0; k < kN; ++k) {
+      p_(A + i, k) *= phi;
+      p_(k, A + i) *= phi;
+    }
+    p_(A + i, A + i) += q;
   }
 }
 

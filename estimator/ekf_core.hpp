@@ -67,6 +67,14 @@ class EkfCore {
   // (constant turn rate); turn_psd 0 freezes b_g as well.
   void predict_cv(Real dt_s, Real accel_psd, Real yaw_psd, Real vel_tau_s, Real turn_psd = Real(0));
 
+  // Ground vehicle without IMU (nothing measures gravity, and ranges from
+  // anchors near the tags' height cannot tell a tilt from a shift of the body
+  // origin below the tags): roll and pitch are a first-order Gauss-Markov
+  // process about level, stationary 1-sigma sigma_rad, time constant tau_s.
+  // The nav-frame tilt of the body z axis shrinks by phi = exp(-dt/tau); the
+  // attitude errors x, y get P <- phi^2 P + sigma^2 (1 - phi^2).
+  void predict_level(Real dt_s, Real sigma_rad, Real tau_s);
+
   // Variance of the innovation of `obs` (H P H^T + R).
   Real innovation_variance(const ErrRow& h, Real r_var) const;
 

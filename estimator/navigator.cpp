@@ -31,6 +31,8 @@ constexpr Real kHardGateMin_m = Real(2);
 constexpr Real kRestMaxHorizAccel_mps2 = Real(0.1);
 // Time constant of the on-line IMU noise floor [s].
 constexpr Real kNoiseFloorTau_s = Real(1);
+// Ground vehicle without IMU: correlation time of roll and pitch about level [s].
+constexpr Real kLevelTau_s = Real(1);
 // Divergence monitor: fewest ranges judged; with sparse ranging the window
 // stretches back to cover them (up to kMonitorMaxSpanUs).
 constexpr size_t kMonitorMinRanges = 10;
@@ -181,6 +183,7 @@ void Navigator::update_params(const Params& params) {
   c.cv_vel_tau = static_cast<Real>(params[ParamId::kEkfCvVelTau]);
   c.cv_speed_sigma = static_cast<Real>(params[ParamId::kEkfCvSpeedSigma]);
   c.cv_turn_psd = static_cast<Real>(params[ParamId::kEkfCvTurnPsd]);
+  c.level_sigma = static_cast<Real>(params[ParamId::kEkfLevelSigma]);
   c.init_window_us = param_us(params[ParamId::kEkfInitWindow] * 1e6F);
   c.init_heading_dist = static_cast<Real>(params[ParamId::kEkfInitHeadingDist]);
   c.init_heading_timeout_us = param_us(params[ParamId::kEkfInitHeadingTimeout] * 1e6F);
@@ -288,6 +291,11 @@ Navigator::CvModel Navigator::cv_model(uint64_t t_us) const {
   m.accel_psd = std::fmax(m.accel_psd, cfg_.cv_speed_sigma * std::sqrt(Real(2) / m.vel_tau_s));
   // With a heading, the turn rate is a state too (no gyro measures it).
   if (cv_yaw_known_) m.turn_psd = cfg_.cv_turn_psd;
+  // Nothing measures gravity: once the lever arms are modelled (heading
+  // known), a ground vehicle's tilt is a prior about level. In the centroid
+  // form (heading unknown) the lever arms' whole uncertainty is in the
+  // published sigma instead.
+  if (site_.platform == Platform::kGround && cv_yaw_known_) m.level_sigma_rad = cfg_.level_sigma;
   return m;
 }
 
@@ -607,7 +615,9 @@ RangeReport Navigator::on_range(const UwbRange& range) {
   if (!cv_mode_ && !imu_alive(range.t_us)) enter_cv_mode(NavMode::kUwbOnly);
   if (cv_mode_ && range.t_us > t_state_us_) {
     const CvModel m = cv_model(range.t_us);
-    ekf_.predict_cv(seconds(diff_us(range.t_us, t_state_us_)), m.accel_psd, cfg_.cv_yaw_psd, m.vel_tau_s, m.turn_psd);
+    const Real dt_cv = seconds(diff_us(range.t_us, t_state_us_));
+    ekf_.predict_cv(dt_cv, m.accel_psd, cfg_.cv_yaw_psd, m.vel_tau_s, m.turn_psd);
+    if (m.level_sigma_rad > Real(0)) ekf_.predict_level(dt_cv, m.level_sigma_rad, kLevelTau_s);
     t_state_us_ = range.t_us;
     check_health();
     if (phase_ != Phase::kRunning) return rep;

@@ -132,6 +132,7 @@ class Navigator {
     Real cv_vel_tau = Real(5);      // [s] ranges-only velocity time constant (no IMU)
     Real cv_speed_sigma = Real(3);  // [m/s] its stationary 1-sigma per axis
     Real cv_turn_psd = Real(1);     // [rad/s^2/sqrt(Hz)] turn-rate walk without IMU
+    Real level_sigma = Real(0.03);  // [rad] ground vehicle without IMU: tilt about level
     uint64_t init_window_us = 300000;
     Real init_heading_dist = Real(3);
     uint64_t init_heading_timeout_us = 30000000;
@@ -199,6 +200,7 @@ class Navigator {
     Real accel_psd = Real(1);
     Real vel_tau_s = Real(0);
     Real turn_psd = Real(0);  // [rad/s^2/sqrt(Hz)], 0: no turn-rate state
+    Real level_sigma_rad = Real(0);  // ground, no IMU: tilt prior about level [rad], 0: none
   };
   CvModel cv_model(uint64_t t_us) const;
   void track_imu_noise(const Vec3& accel_body_mps2, const Vec3& gyro_body_radps, Real dt_s);

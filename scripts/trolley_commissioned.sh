@@ -20,7 +20,10 @@ for seed in $(seq "$first" "$last"); do
   d="$work/trolley3_$seed"
   rm -rf "$d"
   "$uwbnav" sim "family:trolley3:$seed" --out "$d/recording" >/dev/null
-  "$uwbnav" calibrate "$d/recording" --method self --out "$d/site.cal" >"$d/calibrate.txt"
+  if ! "$uwbnav" calibrate "$d/recording" --method self --out "$d/site.cal" >"$d/calibrate.txt" 2>&1; then
+    echo "| family:trolley3:$seed | self-calibration refused: $(tail -1 "$d/calibrate.txt" | sed -e "s/^uwbnav calibrate: //" -e "s|$d/||g") ||||||"
+    continue
+  fi
   "$uwbnav" replay "$d/recording" --out "$d/cal" --cal "$d/site.cal" >"$d/replay_cal.txt"
   "$uwbnav" replay "$d/recording" --out "$d/raw" >"$d/replay_raw.txt"
   /usr/bin/python3 - "$d" "$seed" <<'EOF'
