@@ -268,17 +268,36 @@ TEST(ConsistencyMc, MeanRevertingVelocityPredictionCoversOrnsteinUhlenbeckTruths
 }
 
 TEST(ConsistencyMc, CvStepSeriesAndClosedFormAgreeAtTheSwitch) {
-  // GIVEN one step just below and just above the switch x = dt/tau = 0.02
+  // GIVEN one step just below and just above the switch x = dt/tau = 0.2
   // WHEN both branches are evaluated
-  const CvStep lo = cv_step(Real(0.0199999), Real(1.3), Real(1));
-  const CvStep hi = cv_step(Real(0.0200001), Real(1.3), Real(1));
+  const CvStep lo = cv_step(Real(0.1999999), Real(1.3), Real(1));
+  const CvStep hi = cv_step(Real(0.2000001), Real(1.3), Real(1));
   // THEN the transition and the process noise are continuous there (a wrong
-  // series term would show as a jump of more than float round-off)
+  // series term, or a switch where the closed form still cancels, would show
+  // as a jump of more than float round-off)
   EXPECT_NEAR(lo.f_vv, hi.f_vv, 1e-6F);
   EXPECT_NEAR(lo.f_pv / hi.f_pv, 1.0F, 1e-4F);
   EXPECT_NEAR(lo.q_vv / hi.q_vv, 1.0F, 1e-4F);
   EXPECT_NEAR(lo.q_pv / hi.q_pv, 1.0F, 1e-4F);
-  EXPECT_NEAR(lo.q_pp / hi.q_pp, 1.0F, 2e-3F);
+  EXPECT_NEAR(lo.q_pp / hi.q_pp, 1.0F, 3e-4F);
+}
+
+TEST(ConsistencyMc, CvStepSeriesMatchesTheClosedFormInDoubleWhereFloatWouldCancel) {
+  // GIVEN small steps x = dt/tau from 1e-3 to 0.19 (the series branch)
+  for (const double x : {1e-3, 0.02, 0.1, 0.19}) {
+    // WHEN cv_step evaluates them in the estimator's precision
+    const CvStep st = cv_step(static_cast<Real>(x), Real(1), Real(1));
+    // THEN it matches the closed form evaluated in double
+    const double phi = std::exp(-x);
+    const double q_pp = 0.5 * (2.0 * x - 3.0 + 4.0 * phi - phi * phi);
+    const double q_pv = 0.5 * (1.0 - phi) * (1.0 - phi);
+    const double q_vv = 0.5 * (1.0 - phi * phi);
+    EXPECT_NEAR(static_cast<double>(st.f_vv), phi, 1e-6) << x;
+    EXPECT_NEAR(static_cast<double>(st.f_pv) / (1.0 - phi), 1.0, 1e-5) << x;
+    EXPECT_NEAR(static_cast<double>(st.q_vv) / q_vv, 1.0, 1e-4) << x;
+    EXPECT_NEAR(static_cast<double>(st.q_pv) / q_pv, 1.0, 1e-4) << x;
+    EXPECT_NEAR(static_cast<double>(st.q_pp) / q_pp, 1.0, 1e-4) << x;
+  }
 }
 
 TEST(ConsistencyMc, ImuPredictionCoversNoisyAndBiasedImuTruths) {
