@@ -55,6 +55,7 @@ constexpr uint64_t kLearnMaxPairGapUs = 2000000;
 constexpr uint64_t kIntegrityPeriodUs = 1000000;
 constexpr uint64_t kIntegrityMaxAgeUs = 500000;
 constexpr Real kIntegrityChi2 = Real(13.8);
+constexpr Real kIntegrityShortSigma = Real(3);
 // Correlation time of the measured horizontal acceleration in the CV model [s].
 constexpr Real kCvAccelCorrTime_s = Real(1);
 // Distance over which a pair's own scale error decorrelates in the offset's random walk [m].
@@ -793,6 +794,7 @@ void Navigator::integrity_check(uint64_t t_us, int tag_index) {
   const Real vel_var = ekf_.cov()(3, 3) + ekf_.cov()(4, 4);
   LsRange ranges[kMaxAnchors];
   size_t n = 0;
+  Real min_z_short = Real(0);
   for (size_t a = 0; a < site_.num_anchors; ++a) {
     const PairRange& pr = pair_[a][tag_index];
     if (!pr.valid || t_us < pr.t_us || t_us - pr.t_us > kIntegrityMaxAgeUs) continue;
@@ -807,6 +809,15 @@ void Navigator::integrity_check(uint64_t t_us, int tag_index) {
                                            known_offset_m(static_cast<int>(a), tag_index) + moved);
     ranges[n].sigma_m =
         static_cast<float>(std::sqrt(r_los_m2_ + anchor_bias_prior_var() + vel_var * age_s * age_s));
+    // NLOS only lengthens a range: a filter that has left its ranges shows a
+    // range clearly shorter than its predicted distance.
+    const Vec3 u = diff / dist;
+    Real var_short = static_cast<Real>(ranges[n].sigma_m) * static_cast<Real>(ranges[n].sigma_m);
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) var_short += u(i) * ekf_.cov()(ErrIdx::kPos + i, ErrIdx::kPos + j) * u(j);
+    }
+    const Real z_short = (static_cast<Real>(ranges[n].range_m) - dist) / std::sqrt(var_short);
+    if (z_short < min_z_short) min_z_short = z_short;
     ++n;
   }
   LsOptions opt;
@@ -837,6 +848,7 @@ void Navigator::integrity_check(uint64_t t_us, int tag_index) {
   if (!(det > Real(0))) return;
   const Real chi2 = (cyy * dx * dx - Real(2) * cxy * dx * dy + cxx * dy * dy) / det;
   if (!(chi2 > kIntegrityChi2)) return;
+  if (!(min_z_short < -kIntegrityShortSigma)) return;  // explained by NLOS-lengthened ranges
   ++diag_.integrity_fails;
   // The filter's claim does not cover its distance to an independent fix:
   // enlarge the claim to cover it (the gate then lets the ranges that would
