@@ -56,6 +56,12 @@ constexpr uint64_t kIntegrityPeriodUs = 1000000;
 constexpr uint64_t kIntegrityMaxAgeUs = 500000;
 constexpr Real kIntegrityChi2 = Real(13.8);
 constexpr Real kIntegrityShortSigma = Real(3);
+// Short-range test: a range this many sigmas shorter than predicted counts,
+// kShortMinRanges of them from two anchors or more fail; |z| below
+// kShortResetSigma clears the count.
+constexpr Real kShortSigma = Real(5);
+constexpr Real kShortResetSigma = Real(3);
+constexpr uint32_t kShortMinRanges = 3;
 // Correlation time of the measured horizontal acceleration in the CV model [s].
 constexpr Real kCvAccelCorrTime_s = Real(1);
 // Distance over which a pair's own scale error decorrelates in the offset's random walk [m].
@@ -736,6 +742,7 @@ RangeReport Navigator::on_range(const UwbRange& range) {
     prev_tag_valid_[ai][ti] = true;
     learn_noise(ai, ti, range.t_us, innov, hph, used && !escape);
     monitor_divergence(range.t_us, innov * innov / s_nom);
+    if (phase_ == Phase::kRunning) short_range_test(range.t_us, ai, innov, s_nom);
   }
   check_health(false);
   if (phase_ == Phase::kRunning) integrity_check(range.t_us, ti);
@@ -850,10 +857,13 @@ void Navigator::integrity_check(uint64_t t_us, int tag_index) {
   if (!(chi2 > kIntegrityChi2)) return;
   if (!(min_z_short < -kIntegrityShortSigma)) return;  // explained by NLOS-lengthened ranges
   ++diag_.integrity_fails;
-  // The filter's claim does not cover its distance to an independent fix:
+  cover_gap(t_us, dx * dx + dy * dy);
+}
+
+void Navigator::cover_gap(uint64_t t_us, Real gap_m2) {
+  // The filter's claim does not cover its distance to what the ranges say:
   // enlarge the claim to cover it (the gate then lets the ranges that would
   // correct the filter back in). Repeated failures escalate through recover().
-  const Real gap2 = dx * dx + dy * dy;
   const bool recent = last_recovery_us_ != 0 && t_us - last_recovery_us_ < cfg_.recover_memory_us;
   if (recent) {
     recover(t_us);
@@ -862,8 +872,38 @@ void Navigator::integrity_check(uint64_t t_us, int tag_index) {
   ++diag_.inflations;
   last_recovery_us_ = t_us;
   recovery_level_ = 1;
-  ekf_.inflate_to(ErrIdx::kPos, 2, gap2);
-  ekf_.inflate_to(ErrIdx::kVel, 2, gap2 * Real(0.25));
+  ekf_.inflate_to(ErrIdx::kPos, 2, gap_m2);
+  ekf_.inflate_to(ErrIdx::kVel, 2, gap_m2 * Real(0.25));
+}
+
+void Navigator::short_range_test(uint64_t t_us, int anchor_index, Real innovation_m, Real innovation_var_m2) {
+  // NLOS only lengthens a range (docs/ekf.md "Short-range test"): a range
+  // shorter than predicted by more than kShortSigma standard deviations has a
+  // probability of about 3e-7 from a consistent filter. Such ranges from at
+  // least two anchors in a row, with no consistent range in between, say the
+  // filter has left its ranges; this test needs no simultaneous ranges, so it
+  // also watches sparse ranging, where the integrity check's LS fix never forms.
+  if (!(innovation_var_m2 > Real(0))) return;
+  const Real z = innovation_m / std::sqrt(innovation_var_m2);
+  if (!(z < -kShortSigma)) {
+    if (std::fabs(z) < kShortResetSigma) {
+      short_count_ = 0;
+      short_anchor_mask_ = 0;
+      short_gap_m2_ = Real(0);
+    }
+    return;  // long ranges may be NLOS: they neither count nor clear
+  }
+  ++short_count_;
+  short_anchor_mask_ |= 1U << (anchor_index < 31 ? anchor_index : 31);
+  short_gap_m2_ = std::fmax(short_gap_m2_, innovation_m * innovation_m);
+  const bool two_anchors = (short_anchor_mask_ & (short_anchor_mask_ - 1U)) != 0U;
+  if (short_count_ < kShortMinRanges || !two_anchors) return;
+  ++diag_.short_range_fails;
+  const Real gap = short_gap_m2_;
+  short_count_ = 0;
+  short_anchor_mask_ = 0;
+  short_gap_m2_ = Real(0);
+  cover_gap(t_us, gap);
 }
 
 void Navigator::recover(uint64_t t_us, uint8_t min_level) {
@@ -881,6 +921,9 @@ void Navigator::recover(uint64_t t_us, uint8_t min_level) {
 #endif
   monitor_head_ = 0;
   monitor_count_ = 0;
+  short_count_ = 0;
+  short_anchor_mask_ = 0;
+  short_gap_m2_ = Real(0);
   const Real anchor_var = anchor_bias_prior_var();
   if (level == 1) {
     // 1. Inflate: the covariance was too small for what the ranges say.
@@ -933,6 +976,9 @@ void Navigator::recover(uint64_t t_us, uint8_t min_level) {
     bg_init_ = ekf_.state().bg_body_radps;
     ba_init_ = ekf_.state().ba_body_mps2;
     levelled_ = true;
+    // That attitude comes from a filter that failed, not from a rest window:
+    // it is handed over again with the moving-levelling uncertainty.
+    levelled_at_rest_ = false;
   }
   track_head_ = 0;
   track_count_ = 0;

@@ -37,6 +37,7 @@ struct NavDiagnostics {
   uint32_t inflations = 0;       // divergence met by covariance inflation
   uint32_t reanchors = 0;        // divergence met by re-anchoring position/velocity to the ranges
   uint32_t integrity_fails = 0;  // integrity checks the filter failed (LS fix disagrees beyond chi-square)
+  uint32_t short_range_fails = 0;  // short-range tests failed (ranges from two anchors clearly shorter than predicted)
   uint32_t operator_resets = 0;  // reset() calls (console `reset filter`)
   uint64_t last_imu_t_us = 0;
   uint64_t last_range_used_t_us = 0;
@@ -212,6 +213,8 @@ class Navigator {
   void monitor_divergence(uint64_t t_us, Real nis);
   void recover(uint64_t t_us, uint8_t min_level = 1);
   void integrity_check(uint64_t t_us, int tag_index);
+  void short_range_test(uint64_t t_us, int anchor_index, Real innovation_m, Real innovation_var_m2);
+  void cover_gap(uint64_t t_us, Real gap_m2);
   Vec3 lever(int tag_index) const;
   Vec3 model_lever(int tag_index) const;
   Vec3 mean_lever() const;
@@ -321,6 +324,10 @@ class Navigator {
   bool monitor_bad_[kMonitorCapacity] = {};
   size_t monitor_head_ = 0;
   size_t monitor_count_ = 0;
+  // Short-range test: ranges clearly shorter than predicted since the last consistent one.
+  uint32_t short_count_ = 0;
+  uint32_t short_anchor_mask_ = 0;  // bit per anchor index (indices >= 32 share bit 31)
+  Real short_gap_m2_ = Real(0);     // largest squared shortfall seen [m^2]
 
 #if UWBNAV_RBF_BRIDGE
   // Outage bridging: the network, and per outage its pseudo-measurements so far.

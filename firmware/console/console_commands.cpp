@@ -186,11 +186,12 @@ void Console::cmd_status(size_t argc, char**) {
 
 // Every kind of reset and recovery, since start or `reset stats`: hard resets
 // (non-finite or exploded state), operator resets (`reset filter`), and the
-// recovery ladder (inflations, re-anchors, re-alignments), integrity failures.
+// recovery ladder (inflations, re-anchors, re-alignments), and what climbed it:
+// integrity failures and short-range failures.
 void Console::add_reset_fields(const NavDiagnostics& dg) {
-  add(" resets=%lu operator_resets=%lu inflations=%lu reanchors=%lu reinits=%lu integrity_fails=%lu",
+  add(" resets=%lu operator_resets=%lu inflations=%lu reanchors=%lu reinits=%lu integrity_fails=%lu short_fails=%lu",
       ul(dg.resets), ul(dg.operator_resets), ul(dg.inflations), ul(dg.reanchors), ul(dg.reinits),
-      ul(dg.integrity_fails));
+      ul(dg.integrity_fails), ul(dg.short_range_fails));
 }
 
 void Console::cmd_stats(size_t argc, char**) {

@@ -390,6 +390,7 @@ TEST(ConsoleCommands, StatusCountsEveryKindOfResetIncludingTheOperatorsResetFilt
   EXPECT_EQ(kv(l, "reanchors"), std::to_string(dg.reanchors));
   EXPECT_EQ(kv(l, "reinits"), std::to_string(dg.reinits));
   EXPECT_EQ(kv(l, "integrity_fails"), std::to_string(dg.integrity_fails));
+  EXPECT_EQ(kv(l, "short_fails"), std::to_string(dg.short_range_fails));
   (void)rig.command("reset filter");
   (void)rig.command("reset filter");
   l = status();

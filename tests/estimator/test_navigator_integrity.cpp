@@ -1,12 +1,14 @@
 // The integrity check (seed 001 RAIM turned on the filter, docs/ekf.md
-// "Integrity check") on simulated drives: ranges lengthened by NLOS never make
-// it re-anchor an accurate filter, and a filter that has left its ranges is
-// brought back without a reset.
+// "Integrity check") and the short-range test on simulated drives: ranges
+// lengthened by NLOS never make them re-anchor an accurate filter, and a
+// filter that has left its ranges is brought back without a reset, with dense
+// ranging (integrity check) and with sparse ranging (short-range test).
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "tests/estimator/nav_harness.hpp"
 #include "tools/sim/family.hpp"
@@ -67,6 +69,44 @@ TEST(NavigatorIntegrity, AFilterPushedOffItsRangesIsBroughtBackWithoutAReset) {
   EXPECT_TRUE(s.all_finite);
   EXPECT_GT(e_push, 1.0);
   EXPECT_LT(e_after, 0.3);
+  EXPECT_EQ(s.diag.resets, 0U);
+}
+
+TEST(NavigatorIntegrity, WithSparseRangingTheShortRangeTestBringsAPushedFilterBack) {
+  // GIVEN the same pushed drive with its ranges thinned to about two per
+  // second: no four ranges are ever fresh (0.5 s) together, so the
+  // integrity check's LS fix never forms
+  sim::SimOutput so;
+  std::string err;
+  ASSERT_EQ(sim::simulate_family("ground_los", 3, sim::FamilyOptions{}, so, &err), Status::kOk) << err;
+  std::vector<dataset::UwbRow> thinned;
+  uint64_t last_us = 0;
+  for (const dataset::UwbRow& r : so.rec.uwb) {
+    if (last_us != 0 && r.range.t_us - last_us < 450000) continue;
+    thinned.push_back(r);
+    last_us = r.range.t_us;
+  }
+  so.rec.uwb = thinned;
+  constexpr uint64_t kFrom_us = 40000000;
+  constexpr uint64_t kTo_us = 42000000;
+  for (ImuSample& s : so.rec.imu) {
+    if (s.t_us >= kFrom_us && s.t_us < kTo_us) s.accel_body_mps2.x += 3.0F;
+  }
+  // WHEN the navigator runs over it
+  const test::RunScore s = test::replay(so.rec, Params{});
+  const double e_push = error_at(s, kTo_us);
+  const double e_after = error_at(s, kTo_us + 20000000);
+  std::printf("ground_los:3 pushed, 2 ranges/s: error %.2f m at the end of the push, %.3f m 20 s later; short-range "
+              "fails %u, integrity fails %u, inflations %u, re-anchors %u, re-aligns %u, resets %u\n",
+              e_push, e_after, s.diag.short_range_fails, s.diag.integrity_fails, s.diag.inflations, s.diag.reanchors,
+              s.diag.reinits, s.diag.resets);
+  // THEN ranges shorter than the filter's distances from two anchors widen
+  // its claim, the gate lets them in, and the output is back within 1 m
+  EXPECT_TRUE(s.all_finite);
+  EXPECT_GT(e_push, 1.0);
+  EXPECT_GE(s.diag.short_range_fails, 1U);
+  EXPECT_EQ(s.diag.integrity_fails, 0U);
+  EXPECT_LT(e_after, 1.0);
   EXPECT_EQ(s.diag.resets, 0U);
 }
 
