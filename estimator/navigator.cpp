@@ -1063,6 +1063,11 @@ NavOutput Navigator::output(uint64_t t_us) {
   out.vel_sigma_mps = Vec3f{static_cast<float>(std::sqrt(var_v[0])), static_cast<float>(std::sqrt(var_v[1])),
                             static_cast<float>(std::sqrt(var_v[2]))};
   out.heading_rad = static_cast<float>(quat_yaw(x.q_nav_body));
+  // The heading is an estimate once a filter carries it (IMU filter, or the
+  // ranges-only filter with a heading); in the centroid form it is arbitrary.
+  if (!(cv_mode_ && !cv_yaw_known_)) {
+    out.heading_sigma_rad = static_cast<float>(std::sqrt(std::fmax(p(ErrIdx::kAtt + 2, ErrIdx::kAtt + 2), Real(0))));
+  }
   if (cv_mode_) {
     out.mode = cv_reason_ == NavMode::kRecovering ? NavMode::kRecovering
                                                   : (imu_alive(t_us) ? NavMode::kAligning : NavMode::kUwbOnly);

@@ -166,6 +166,7 @@ struct NavOutput {
   float pos_xy_corr = 0.0F;      // correlation coefficient of x/y position errors [-]
   Vec3f vel_sigma_mps;           // claimed 1-sigma velocity per axis [m/s]
   float heading_rad = 0.0F;      // yaw of body x axis from nav x axis, CCW positive [rad]
+  float heading_sigma_rad = kNaNf;  // claimed 1-sigma of heading_rad [rad]; NaN: the heading is not an estimate
   uint16_t ranges_used = 0;      // ranges fused since the previous output
   uint16_t ranges_rejected = 0;  // ranges rejected since the previous output
   uint32_t resets = 0;           // filter resets since start

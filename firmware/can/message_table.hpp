@@ -11,7 +11,7 @@
 
 namespace uwbnav::can {
 
-// 11-bit identifiers (docs/can.md). Outputs 0x100..0x105, HIL inputs 0x0A0..0x0B1.
+// 11-bit identifiers (docs/can.md). Outputs 0x100..0x106, HIL inputs 0x0A0..0x0B1.
 enum class MsgId : uint16_t {
   kNavTime = 0x100,      // output: time of the solution the 10 ms group belongs to
   kPosXY = 0x101,        // output: horizontal position + status
@@ -19,6 +19,7 @@ enum class MsgId : uint16_t {
   kVelHdg = 0x103,       // output: horizontal velocity + heading
   kAccuracy = 0x104,     // output: 1-sigma x/y/z + xy correlation
   kDiag = 0x105,         // output: NLOS mask, overruns, input rejects, resets
+  kAttitude = 0x106,     // output: heading 1-sigma, roll, pitch
   kHilImuTime = 0x0A0,   // HIL input: IMU sample timestamp
   kHilImuAccel = 0x0A1,  // HIL input: IMU specific force
   kHilImuGyro = 0x0A2,   // HIL input: IMU angular rate
@@ -183,6 +184,18 @@ inline constexpr SignalDef kDiagSignals[] = {
      "sensor frames rejected by input validation since start (saturates)", NonFinite::kZeroFlagged, nullptr, 0},
 };
 
+inline constexpr SignalDef kAttitudeSignals[] = {
+    UWBNAV_CAN_HEADER("Attitude"),
+    {"HeadingSigma", 16, 12, false, 0.001, 0.0, 0.0, 4.095, "rad",
+     "claimed 1-sigma of VelHdg Heading; maximum (with Saturated) while the heading is not an estimate",
+     NonFinite::kMaxFlagged, nullptr, 0},
+    {"Roll", 28, 16, true, 0.0001, 0.0, -3.1416, 3.1416, "rad", "roll of the body frame (FLU) from the navigation frame",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"Pitch", 44, 16, true, 0.0001, 0.0, -1.5708, 1.5708, "rad",
+     "pitch of the body frame (FLU) from the navigation frame, nose down positive about body y",
+     NonFinite::kZeroFlagged, nullptr, 0},
+};
+
 inline constexpr SignalDef kHilImuTimeSignals[] = {
     UWBNAV_CAN_HEADER("ImuTime"),
     {"ImuTime_Us", 16, 32, false, 1.0, 0.0, 0.0, 4294967295.0, "us",
@@ -262,6 +275,9 @@ inline constexpr MessageDef kMessages[] = {
     {id_of(MsgId::kDiag), "UWBNAV_Diag", 8, table::data_id_for(MsgId::kDiag), 100, true,
      "Diagnostics: per-anchor NLOS decisions, loop overruns, input rejects, filter resets.",
      table::kDiagSignals, table::count_of(table::kDiagSignals)},
+    {id_of(MsgId::kAttitude), "UWBNAV_Attitude", 8, table::data_id_for(MsgId::kAttitude), 20, true,
+     "Heading accuracy and the attitude's roll and pitch (sent with UWBNAV_Accuracy: parameter can.accuracy_period_ms).",
+     table::kAttitudeSignals, table::count_of(table::kAttitudeSignals)},
     {id_of(MsgId::kHilImuTime), "HIL_ImuTime", 8, table::data_id_for(MsgId::kHilImuTime), 10, false,
      "HIL input, IMU sample part 1 of 3 (time). The three parts of one sample carry the same alive counter.",
      table::kHilImuTimeSignals, table::count_of(table::kHilImuTimeSignals)},

@@ -367,12 +367,13 @@ static_assert(kinds_are(MsgId::kPosZ, "cppcc"));
 static_assert(kinds_are(MsgId::kVelHdg, "ppa"));
 static_assert(kinds_are(MsgId::kAccuracy, "pppp"));
 static_assert(kinds_are(MsgId::kDiag, "cccc"));
+static_assert(kinds_are(MsgId::kAttitude, "pap"));
 static_assert(kinds_are(MsgId::kHilImuTime, "c"));
 static_assert(kinds_are(MsgId::kHilImuAccel, "ppp"));
 static_assert(kinds_are(MsgId::kHilImuGyro, "ppp"));
 static_assert(kinds_are(MsgId::kHilUwbRange, "ccp"));
 static_assert(kinds_are(MsgId::kHilUwbTime, "cpp"));
-static_assert(kNumMessages == 11, "a new message needs its kinds_are() line and typed encode/decode");
+static_assert(kNumMessages == 12, "a new message needs its kinds_are() line and typed encode/decode");
 
 NavStatus status_from(uint64_t v) { return static_cast<NavStatus>(v & 0x3U); }
 
@@ -417,6 +418,14 @@ bool encode(const AccuracyMsg& m, uint8_t counter, hal::CanFrame& out) {
   p.phys(m.sigma_y_m);
   p.phys(m.sigma_z_m);
   p.phys(m.corr_xy);
+  return p.finish(counter);
+}
+
+bool encode(const AttitudeMsg& m, uint8_t counter, hal::CanFrame& out) {
+  Packer p(layout<MsgId::kAttitude>(), out);
+  p.phys(m.heading_sigma_rad);
+  p.angle(m.roll_rad);
+  p.phys(m.pitch_rad);
   return p.finish(counter);
 }
 
@@ -521,6 +530,17 @@ Status decode(const hal::CanFrame& f, AccuracyMsg& m, FrameMeta* meta) {
     m.sigma_y_m = u.phys();
     m.sigma_z_m = u.phys();
     m.corr_xy = u.phys();
+  }
+  return s;
+}
+
+Status decode(const hal::CanFrame& f, AttitudeMsg& m, FrameMeta* meta) {
+  Unpacker u(layout<MsgId::kAttitude>(), f);
+  const Status s = u.check(meta);
+  if (s == Status::kOk) {
+    m.heading_sigma_rad = u.phys();
+    m.roll_rad = u.phys();
+    m.pitch_rad = u.phys();
   }
   return s;
 }

@@ -109,6 +109,11 @@ struct DiagMsg {
   uint64_t overruns = 0;        // saturates at 65535
   uint32_t input_rejects = 0;   // saturates at 65535
 };
+struct AttitudeMsg {
+  float heading_sigma_rad = kNaNf;  // 1-sigma of VelHdg heading [rad], 0.001, 0..4.095; NaN: not an estimate
+  float roll_rad = 0.0F;            // [rad], 0.0001, wrapped to [-pi, pi]
+  float pitch_rad = 0.0F;           // [rad], 0.0001, +-pi/2
+};
 struct HilImuTimeMsg {
   uint32_t t_sensor_us = 0;  // low 32 bits of the sample's t_us (wraps every 71.6 min)
 };
@@ -138,6 +143,7 @@ bool encode(const PosZMsg& m, uint8_t counter, hal::CanFrame& out);
 bool encode(const VelHdgMsg& m, uint8_t counter, hal::CanFrame& out);
 bool encode(const AccuracyMsg& m, uint8_t counter, hal::CanFrame& out);
 bool encode(const DiagMsg& m, uint8_t counter, hal::CanFrame& out);
+bool encode(const AttitudeMsg& m, uint8_t counter, hal::CanFrame& out);
 bool encode(const HilImuTimeMsg& m, uint8_t counter, hal::CanFrame& out);
 bool encode(const HilImuAccelMsg& m, uint8_t counter, hal::CanFrame& out);
 bool encode(const HilImuGyroMsg& m, uint8_t counter, hal::CanFrame& out);
@@ -150,6 +156,7 @@ bool encode(const HilUwbTimeMsg& m, uint8_t counter, hal::CanFrame& out);
 [[nodiscard]] Status decode(const hal::CanFrame& f, VelHdgMsg& m, FrameMeta* meta = nullptr);
 [[nodiscard]] Status decode(const hal::CanFrame& f, AccuracyMsg& m, FrameMeta* meta = nullptr);
 [[nodiscard]] Status decode(const hal::CanFrame& f, DiagMsg& m, FrameMeta* meta = nullptr);
+[[nodiscard]] Status decode(const hal::CanFrame& f, AttitudeMsg& m, FrameMeta* meta = nullptr);
 [[nodiscard]] Status decode(const hal::CanFrame& f, HilImuTimeMsg& m, FrameMeta* meta = nullptr);
 [[nodiscard]] Status decode(const hal::CanFrame& f, HilImuAccelMsg& m, FrameMeta* meta = nullptr);
 [[nodiscard]] Status decode(const hal::CanFrame& f, HilImuGyroMsg& m, FrameMeta* meta = nullptr);

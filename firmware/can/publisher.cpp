@@ -65,6 +65,16 @@ AccuracyMsg accuracy_from(const NavOutput& nav) {
   return m;
 }
 
+AttitudeMsg attitude_from(const NavOutput& nav) {
+  // Roll and pitch of the Z-Y-X (yaw, pitch, roll) decomposition of q_nav_body.
+  AttitudeMsg m;
+  const float w = nav.q_nav_body[0], x = nav.q_nav_body[1], y = nav.q_nav_body[2], z = nav.q_nav_body[3];
+  m.heading_sigma_rad = nav.heading_sigma_rad;
+  m.roll_rad = std::atan2(2.0F * (w * x + y * z), 1.0F - 2.0F * (x * x + y * y));
+  m.pitch_rad = std::asin(std::fmin(std::fmax(2.0F * (w * y - z * x), -1.0F), 1.0F));
+  return m;
+}
+
 DiagMsg diag_from(const CanDiag& diag) {
   DiagMsg m;
   m.nlos_mask = diag.nlos_mask;
@@ -125,8 +135,10 @@ void CanPublisher::on_cycle(uint64_t t_us, const NavOutput& nav, const CanDiag& 
     send(kVelHdg, f, sat, bus);
   }
   if (due(accuracy_, t_us)) {
-    const bool sat = encode(accuracy_from(nav), counters_[kAccuracy], f);
+    bool sat = encode(accuracy_from(nav), counters_[kAccuracy], f);
     send(kAccuracy, f, sat, bus);
+    sat = encode(attitude_from(nav), counters_[kAttitude], f);
+    send(kAttitude, f, sat, bus);
   }
   if (due(diag_, t_us)) {
     const bool sat = encode(diag_from(diag), counters_[kDiag], f);

@@ -56,7 +56,7 @@ class CanPublisher {
     uint64_t next_due_us = 0;
     bool started = false;
   };
-  enum Slot : uint8_t { kNavTime = 0, kPosXY, kPosZ, kVelHdg, kAccuracy, kDiag, kNumSlots };
+  enum Slot : uint8_t { kNavTime = 0, kPosXY, kPosZ, kVelHdg, kAccuracy, kDiag, kAttitude, kNumSlots };
 
   static bool due(Schedule& s, uint64_t t_us);
   void send(Slot slot, hal::CanFrame& frame, bool saturated, hal::CanBus& bus);
@@ -74,6 +74,7 @@ PosXYMsg pos_xy_from(const NavOutput& nav);
 PosZMsg pos_z_from(const NavOutput& nav);
 VelHdgMsg vel_hdg_from(const NavOutput& nav);
 AccuracyMsg accuracy_from(const NavOutput& nav);
+AttitudeMsg attitude_from(const NavOutput& nav);
 DiagMsg diag_from(const CanDiag& diag);
 
 }  // namespace uwbnav::can

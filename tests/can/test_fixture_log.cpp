@@ -31,6 +31,7 @@ NavOutput output_at(int i) {
   o.pos_nav_m = Vec3f{25.0F * std::cos(a) + 100.0F, 25.0F * std::sin(a) - 40.0F, 0.5F + 0.001F * static_cast<float>(i % 7)};
   o.vel_nav_mps = Vec3f{-2.5F * std::sin(a), 2.5F * std::cos(a), 0.0F};
   o.heading_rad = a + 1.5707964F;
+  o.heading_sigma_rad = 0.03F;
   o.pos_sigma_m = Vec3f{0.04F, 0.05F, 0.12F};
   o.pos_xy_corr = 0.1F;
   o.ranges_used = static_cast<uint16_t>(i % 5);
@@ -66,7 +67,7 @@ TEST(CanFixture, WritesCandumpLogAndEstimatesForThePythonDecoder) {
   }
   ASSERT_EQ(est.close(), Status::kOk);
   ASSERT_EQ(log.close(), Status::kOk);
-  EXPECT_EQ(pub.stats().sent, static_cast<uint32_t>(n * 4 + n / 2 + n / 10));
+  EXPECT_EQ(pub.stats().sent, static_cast<uint32_t>(n * 4 + 2 * (n / 2) + n / 10));
   EXPECT_EQ(pub.stats().saturated, 2U);
 
   // Read back with the C++ reader: every position frame decodes to its output.

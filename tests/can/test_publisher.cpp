@@ -2,6 +2,7 @@
 // the vehicle decodes, and counted (never blocking, never retried) drops.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <map>
 #include <vector>
 
@@ -19,6 +20,15 @@ NavOutput sample_output(uint64_t t_us) {
   o.pos_nav_m = Vec3f{12.345F, -67.891F, 1.234F};
   o.vel_nav_mps = Vec3f{1.5F, -0.25F, 0.01F};
   o.heading_rad = 0.7F;
+  o.heading_sigma_rad = 0.02F;
+  // Z-Y-X attitude: yaw 0.7, pitch -0.1, roll 0.05 [rad]
+  const double h[3] = {0.5 * 0.7, 0.5 * -0.1, 0.5 * 0.05};
+  const double cy = std::cos(h[0]), sy = std::sin(h[0]), cp = std::cos(h[1]), sp = std::sin(h[1]);
+  const double cr = std::cos(h[2]), sr = std::sin(h[2]);
+  o.q_nav_body[0] = static_cast<float>(cr * cp * cy + sr * sp * sy);
+  o.q_nav_body[1] = static_cast<float>(sr * cp * cy - cr * sp * sy);
+  o.q_nav_body[2] = static_cast<float>(cr * sp * cy + sr * cp * sy);
+  o.q_nav_body[3] = static_cast<float>(cr * cp * sy - sr * sp * cy);
   o.pos_sigma_m = Vec3f{0.05F, 0.06F, 0.2F};
   o.pos_xy_corr = -0.3F;
   o.ranges_used = 4;
@@ -49,7 +59,8 @@ TEST(CanPublisher, SendsEachMessageAtItsPeriodOverOneSecond) {
   EXPECT_EQ(per_id[0x103], 100);
   EXPECT_EQ(per_id[0x104], 50);
   EXPECT_EQ(per_id[0x105], 10);
-  EXPECT_EQ(pub.stats().sent, 460U);
+  EXPECT_EQ(per_id[0x106], 50);
+  EXPECT_EQ(pub.stats().sent, 510U);
   EXPECT_EQ(pub.stats().dropped, 0U);
 }
 
@@ -69,6 +80,7 @@ TEST(CanPublisher, PeriodsFollowParametersAndToleratesLoopJitter) {
   for (const auto& f : drain(bus)) ++per_id[f.id];
   EXPECT_EQ(per_id[0x101], 100);
   EXPECT_EQ(per_id[0x104], 10);
+  EXPECT_EQ(per_id[0x106], 10);
   EXPECT_EQ(per_id[0x105], 2);
 }
 
@@ -122,6 +134,13 @@ TEST(CanPublisher, FramesDecodeToTheNavOutputAndShareTheGroupCounter) {
         ASSERT_EQ(decode(f, m, &meta), Status::kOk);
         EXPECT_NEAR(m.sigma_y_m, 0.06F, 0.0025F);
         EXPECT_NEAR(m.corr_xy, -0.3F, 0.0005F);
+      } else if (f.id == 0x106) {
+        AttitudeMsg m;
+        ASSERT_EQ(decode(f, m, &meta), Status::kOk);
+        EXPECT_NEAR(m.heading_sigma_rad, 0.02F, 0.0005F);
+        EXPECT_NEAR(m.roll_rad, 0.05F, 0.0002F);
+        EXPECT_NEAR(m.pitch_rad, -0.1F, 0.0002F);
+        EXPECT_FALSE(meta.saturated);
       } else if (f.id == 0x105) {
         DiagMsg m;
         ASSERT_EQ(decode(f, m, &meta), Status::kOk);
@@ -147,10 +166,10 @@ TEST(CanPublisher, FullDriverQueueDropsAndCountsWithoutRetryAndCountersStillAdva
   bus.set_auto_flush(false);
   CanDiag diag;
   pub.on_cycle(1000000, sample_output(1000000), diag, bus);
-  // 6 frames due (4 position group + accuracy + diag), 2 accepted.
+  // 7 frames due (4 position group + accuracy + attitude + diag), 2 accepted.
   EXPECT_EQ(pub.stats().sent, 2U);
-  EXPECT_EQ(pub.stats().dropped, 4U);
-  EXPECT_EQ(bus.counters().tx_dropped, 4U);
+  EXPECT_EQ(pub.stats().dropped, 5U);
+  EXPECT_EQ(bus.counters().tx_dropped, 5U);
   EXPECT_EQ(bus.flush(), 2U);
   pub.on_cycle(1010000, sample_output(1010000), diag, bus);
   bus.flush();
@@ -171,7 +190,7 @@ TEST(CanPublisher, BusOffFailsAreCountedAndSilentWhenDisabled) {
   bus.set_state(hal::CanBusState::kBusOff);
   CanDiag diag;
   pub.on_cycle(1000000, sample_output(1000000), diag, bus);
-  EXPECT_EQ(pub.stats().failed, 6U);
+  EXPECT_EQ(pub.stats().failed, 7U);
   EXPECT_EQ(pub.stats().sent, 0U);
 
   ASSERT_EQ(params.set(ParamId::kCanTxEnable, 0.0F), Status::kOk);

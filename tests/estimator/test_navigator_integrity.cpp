@@ -5,6 +5,7 @@
 // ranging (integrity check) and with sparse ranging (short-range test).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -108,6 +109,44 @@ TEST(NavigatorIntegrity, WithSparseRangingTheShortRangeTestBringsAPushedFilterBa
   EXPECT_EQ(s.diag.integrity_fails, 0U);
   EXPECT_LT(e_after, 1.0);
   EXPECT_EQ(s.diag.resets, 0U);
+}
+
+TEST(NavigatorHeadingSigma, IsNaNWhileTheHeadingIsNoEstimateAndCoversTheHeadingErrorAfterwards) {
+  // GIVEN a line-of-sight drive with IMU that starts parked (family ground_los, seed 3)
+  sim::SimOutput so;
+  std::string err;
+  ASSERT_EQ(sim::simulate_family("ground_los", 3, sim::FamilyOptions{}, so, &err), Status::kOk) << err;
+  // WHEN the navigator runs over it
+  const test::RunScore s = test::replay(so.rec, Params{});
+  size_t unknown = 0, known = 0, covered = 0;
+  for (const test::ScoredOutput& o : s.outputs) {
+    if (o.out.mode == NavMode::kNone) {
+      EXPECT_TRUE(std::isnan(o.out.heading_sigma_rad));
+      continue;
+    }
+    if (std::isnan(o.out.heading_sigma_rad)) {
+      // THEN a heading that is no estimate only occurs before the IMU filter runs
+      EXPECT_NE(o.out.mode, NavMode::kInertial);
+      ++unknown;
+      continue;
+    }
+    const auto& tr = so.rec.truth;
+    auto it = std::lower_bound(tr.begin(), tr.end(), o.out.t_us,
+                               [](const dataset::TruthRow& r, uint64_t t) { return r.t_us < t; });
+    if (it == tr.end() || !it->has_attitude) continue;
+    const double* q = it->q_nav_body;
+    const double yaw = std::atan2(2.0 * (q[0] * q[3] + q[1] * q[2]), 1.0 - 2.0 * (q[2] * q[2] + q[3] * q[3]));
+    const double e = std::remainder(static_cast<double>(o.out.heading_rad) - yaw, 2.0 * M_PI);
+    ++known;
+    if (std::fabs(e) <= 2.0 * static_cast<double>(o.out.heading_sigma_rad)) ++covered;
+  }
+  std::printf("ground_los:3: heading unknown in %zu outputs, known in %zu, inside 2 sigma %.1f %%\n", unknown, known,
+              known > 0 ? 100.0 * static_cast<double>(covered) / static_cast<double>(known) : 0.0);
+  // AND once it is an estimate, its claimed sigma covers the heading error
+  // (2 sigma, Gaussian 95 %) in at least 90 % of the outputs
+  EXPECT_GT(unknown, 0U);
+  EXPECT_GT(known, 1000U);
+  EXPECT_GE(static_cast<double>(covered), 0.9 * static_cast<double>(known));
 }
 
 }  // namespace

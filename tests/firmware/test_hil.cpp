@@ -171,7 +171,8 @@ TEST(Hil, OutputFramesDecodeWithoutGapsAndEqualADirectReplayOfTheCanQuantisedInp
     EXPECT_GT(c.received, 0U) << c.name;
   }
   EXPECT_EQ(hil.tx.sent, m.messages()[0].received + m.messages()[1].received + m.messages()[2].received +
-                             m.messages()[3].received + m.messages()[4].received + m.messages()[5].received);
+                             m.messages()[3].received + m.messages()[4].received + m.messages()[5].received +
+                             m.messages()[6].received);
   ASSERT_EQ(m.solutions().size(), direct.estimates.size());
 
   // Same solution times and statuses; positions equal a direct replay of the

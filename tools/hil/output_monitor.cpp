@@ -9,7 +9,8 @@ namespace uwbnav::hil {
 namespace {
 
 constexpr can::MsgId kOutputs[] = {can::MsgId::kNavTime, can::MsgId::kPosXY,    can::MsgId::kPosZ,
-                                   can::MsgId::kVelHdg,  can::MsgId::kAccuracy, can::MsgId::kDiag};
+                                   can::MsgId::kVelHdg,  can::MsgId::kAccuracy, can::MsgId::kDiag,
+                                   can::MsgId::kAttitude};
 
 }  // namespace
 
@@ -147,6 +148,11 @@ void OutputMonitor::on_frame(const hal::CanFrame& frame, uint64_t arrival_us) {
     }
     case can::MsgId::kAccuracy: {
       can::AccuracyMsg m;
+      ignore_result(admit(*c, can::decode(frame, m, &meta), meta));
+      return;
+    }
+    case can::MsgId::kAttitude: {
+      can::AttitudeMsg m;
       ignore_result(admit(*c, can::decode(frame, m, &meta), meta));
       return;
     }
