@@ -188,6 +188,7 @@ void Navigator::update_params(const Params& params) {
   c.cv_accel_psd = static_cast<Real>(params[ParamId::kEkfCvAccelPsd]);
   c.cv_yaw_psd = static_cast<Real>(params[ParamId::kEkfCvYawPsd]);
   c.cv_vel_tau = static_cast<Real>(params[ParamId::kEkfCvVelTau]);
+  c.cv_vel_tau_us = param_us(params[ParamId::kEkfCvVelTau] * 1e6F);
   c.cv_speed_sigma = static_cast<Real>(params[ParamId::kEkfCvSpeedSigma]);
   c.cv_turn_psd = static_cast<Real>(params[ParamId::kEkfCvTurnPsd]);
   c.level_sigma = static_cast<Real>(params[ParamId::kEkfLevelSigma]);
@@ -293,7 +294,9 @@ Navigator::CvModel Navigator::cv_model(uint64_t t_us) const {
   // pulling away: constant velocity (tau 0).
   CvModel m;
   m.accel_psd = cv_accel_psd(t_us);
-  if (imu_alive(t_us)) return m;
+  // A multicopter does not pull away like a car, and it cannot keep flying in
+  // one direction: its velocity is the mean-reverting prior with an IMU too.
+  if (imu_alive(t_us) && site_.platform != Platform::kAir) return m;
   m.vel_tau_s = cfg_.cv_vel_tau;
   m.accel_psd = std::fmax(m.accel_psd, cfg_.cv_speed_sigma * std::sqrt(Real(2) / m.vel_tau_s));
   // With a heading, the turn rate is a state too (no gyro measures it).
@@ -397,6 +400,18 @@ void Navigator::apply_constraints(uint64_t t_us) {
       (void)fuse(mm_nhc(ekf_.state(), ekf_.dcm(), 1, cfg_.nhc_sigma_lat));
     }
     return;
+  }
+  if (site_.platform == Platform::kAir) {
+    // The platform's speed prior (the ranges-only model's stationary velocity,
+    // ekf.cv_speed_sigma per axis) as a pseudo-measurement once per velocity
+    // correlation time (ekf.cv_vel_tau, so that successive ones are about
+    // independent): it carries nothing while ranges hold the velocity to
+    // centimetres per second, and bounds an IMU filter whose velocity the
+    // sparse ranges no longer hold (a multicopter does not fly off at 50 m/s).
+    if (last_speed_prior_us_ == 0 || t_us - last_speed_prior_us_ >= cfg_.cv_vel_tau_us) {
+      last_speed_prior_us_ = t_us;
+      for (int i = 0; i < 2; ++i) (void)fuse(mm_zupt(ekf_.state(), i, cfg_.cv_speed_sigma));
+    }
   }
   if (!cfg_.ground_constraints) return;
   rest_.evaluate();

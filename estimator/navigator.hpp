@@ -131,6 +131,7 @@ class Navigator {
     Real cv_accel_psd = Real(1);
     Real cv_yaw_psd = Real(0.3);
     Real cv_vel_tau = Real(5);      // [s] ranges-only velocity time constant (no IMU)
+    uint64_t cv_vel_tau_us = 5000000;  // the same [us] (air: period of the speed prior)
     Real cv_speed_sigma = Real(3);  // [m/s] its stationary 1-sigma per axis
     Real cv_turn_psd = Real(1);     // [rad/s^2/sqrt(Hz)] turn-rate walk without IMU
     Real level_sigma = Real(0.03);  // [rad] ground vehicle without IMU: tilt about level
@@ -183,6 +184,7 @@ class Navigator {
   void start_filter(uint64_t t_us, Real yaw_rad, Real yaw_sigma_rad);
   void yaw_bank_on_range(int anchor_index, int tag_index, const UwbRange& range);
   YawGsf::Noise yaw_bank_noise() const;
+  Real levelled_tilt_sigma() const;
   Status robust_ls_fix(LsRange* ranges, size_t n, const LsOptions& opt, LsFix& ls) const;
   void setup_height(Real origin_z_m);
   void start_cv_filter(uint64_t t_us, const TrackFix& fix, NavMode reason);
@@ -248,6 +250,7 @@ class Navigator {
   uint64_t t_state_us_ = 0;      // time of the filter state [us]
   uint64_t running_since_us_ = 0;  // time the filter (re)started [us]
   uint64_t last_constraint_us_ = 0;
+  uint64_t last_speed_prior_us_ = 0;  // air: last speed-prior pseudo-measurement [us]
   uint64_t last_level_check_us_ = 0;  // levelling / rest judged at the constraint rate while not inertial
 
   // Range errors: anchor-offset slots, tag-offset time, learned ranging noise.

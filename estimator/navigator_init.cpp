@@ -35,6 +35,13 @@ constexpr int kYawBankMinUpdates = 10;             // yaw bank: fewest ranges be
 constexpr Real kYawBankCorrTime_s = Real(1);       // yaw bank: correlation time turning bias/tilt into white noise [s]
 constexpr Real kTiltSigmaRest_rad = Real(0.01);    // tilt 1-sigma after levelling at rest [rad]
 constexpr Real kTiltSigmaMoving_rad = Real(0.05);  // tilt 1-sigma when levelled on the move [rad]
+constexpr Real kLevelGain_radps = Real(0.2);       // air, aligning: tilt correction gain toward the specific force (5 s) [1/s]
+constexpr Real kLevelBiasGain_radps2 = Real(0.01); // ... and its gyro-bias integral gain [1/s^2]
+// Air, aligning: tilt 1-sigma of the complementary filter. Its reference is the
+// specific force averaged over about 1/kLevelGain = 5 s: a multicopter's mean
+// horizontal acceleration over 5 s (about 0.8 m/s^2, 0.08 rad) and the gyro
+// bias it has not yet learnt (0.5 deg/s over 5 s, 0.04 rad).
+constexpr Real kTiltSigmaAir_rad = Real(0.1);
 constexpr Real kMaxLinearYawSigma_rad = Real(0.5); // largest yaw 1-sigma the IMU filter is started with
 constexpr Real kAccelEmaTau_s = Real(0.5);
 constexpr Real kRestMaxForceChange_mps2 = Real(0.1);  // rest: largest change of the mean specific force [m/s^2]         // horizontal acceleration EMA time constant [s]
@@ -83,6 +90,7 @@ void Navigator::restart(bool counted_reset) {
   first_imu_t_us_ = 0;
   heading_wait_since_us_ = 0;
   last_constraint_us_ = 0;
+  last_speed_prior_us_ = 0;
   last_level_check_us_ = 0;
   recovery_level_ = 0;
   have_fix_ = false;
@@ -108,7 +116,25 @@ void Navigator::init_on_imu(const ImuSample& imu) {
   const Real dt = static_cast<Real>(imu.t_us - prev_imu_.t_us) * Real(1e-6);
   if (levelled_) {
     // Attitude with an arbitrary (relative) yaw until the heading is known.
-    const Vec3 dtheta = (w_mean - bg_init_) * dt;
+    Vec3 w_corr = Vec3::Zero();
+    if (site_.platform == Platform::kAir) {
+      // A multicopter's specific force points along its thrust, i.e. up on
+      // average: a complementary filter (Mahony, proportional and integral)
+      // keeps the levelled attitude's tilt and the gyro bias from drifting
+      // while it flies without a heading; only roll and pitch are corrected
+      // (the correction is perpendicular to the vertical). A ground vehicle's
+      // specific force is not vertical in turns and braking: it is re-levelled
+      // at rest instead.
+      const Vec3 f = to_vec3(imu.accel_body_mps2);
+      const Real fn = f.norm();
+      if (fn > Real(0.5) * static_cast<Real>(site_.gravity_mps2)) {
+        const Vec3 up_body = quat_to_dcm(q_init_).transpose() * Vec3(0, 0, 1);
+        const Vec3 e = (f / fn).cross(up_body);
+        w_corr = kLevelGain_radps * e;
+        bg_init_ -= kLevelBiasGain_radps2 * e * dt;
+      }
+    }
+    const Vec3 dtheta = (w_mean - bg_init_ + w_corr) * dt;
     if (gsf_.active()) {
       const Vec3 f_mean = Real(0.5) * (to_vec3(imu.accel_body_mps2) + to_vec3(prev_imu_.accel_body_mps2));
       gsf_.accumulate(quat_to_dcm(quat_mul(q_init_, quat_exp(Real(0.5) * dtheta))) * f_mean, dt);
@@ -339,12 +365,17 @@ void Navigator::align_in_background(int anchor_index, int tag_index, const UwbRa
   }
 }
 
+Real Navigator::levelled_tilt_sigma() const {
+  if (levelled_at_rest_) return kTiltSigmaRest_rad;
+  return site_.platform == Platform::kAir ? kTiltSigmaAir_rad : kTiltSigmaMoving_rad;
+}
+
 YawGsf::Noise Navigator::yaw_bank_noise() const {
   // The models estimate neither accelerometer bias nor tilt: both enter as
   // white acceleration with a 1 s correlation time, on top of the measured
   // accelerometer noise; the start yaw walks with gyro noise and bias.
   YawGsf::Noise nz;
-  const Real tilt = levelled_at_rest_ ? kTiltSigmaRest_rad : kTiltSigmaMoving_rad;
+  const Real tilt = levelled_tilt_sigma();
   const Real g_tilt = static_cast<Real>(site_.gravity_mps2) * tilt;
   const Real ba = cfg_.accel_bias_init;
   nz.accel_psd = std::sqrt(imu_eff_.accel_noise * imu_eff_.accel_noise + (ba * ba + g_tilt * g_tilt) * kYawBankCorrTime_s);
@@ -640,7 +671,7 @@ void Navigator::start_filter(uint64_t t_us, Real yaw_rad, Real yaw_sigma_rad) {
   x.bg_body_radps = bg_init_;
   ekf_.refresh_dcm();
   ErrVec sigma = ErrVec::Zero();
-  const Real tilt = levelled_at_rest_ ? kTiltSigmaRest_rad : kTiltSigmaMoving_rad;
+  const Real tilt = levelled_tilt_sigma();
   const Real bg = levelled_at_rest_ ? std::fmin(cfg_.gyro_bias_init, Real(0.002)) : cfg_.gyro_bias_init;
   sigma.segment<3>(ErrIdx::kAtt) = Vec3(tilt, tilt, yaw_sigma_rad);
   sigma.segment<3>(ErrIdx::kBa).setConstant(cfg_.accel_bias_init);
