@@ -25,6 +25,16 @@ double error_at(const test::RunScore& s, uint64_t t_us) {
   return NAN;
 }
 
+// The push of the recovery tests: the accelerometer reads 3 m/s^2 too much
+// along body x for 2 s from t = 40 s.
+constexpr uint64_t kPushFrom_us = 40000000;
+constexpr uint64_t kPushTo_us = 42000000;
+void push_accelerometer(dataset::Recording& rec) {
+  for (ImuSample& s : rec.imu) {
+    if (s.t_us >= kPushFrom_us && s.t_us < kPushTo_us) s.accel_body_mps2.x += 3.0F;
+  }
+}
+
 TEST(NavigatorIntegrity, NlosLengthenedRangesDoNotReanchorAnAccurateFilter) {
   // GIVEN a tuning drive of the NLOS lot (family ground_nlos, seed 7) where two
   // of the four anchors range up to 5 m long at once while the filter tracks
@@ -52,15 +62,11 @@ TEST(NavigatorIntegrity, AFilterPushedOffItsRangesIsBroughtBackWithoutAReset) {
   sim::SimOutput so;
   std::string err;
   ASSERT_EQ(sim::simulate_family("ground_los", 3, sim::FamilyOptions{}, so, &err), Status::kOk) << err;
-  constexpr uint64_t kFrom_us = 40000000;
-  constexpr uint64_t kTo_us = 42000000;
-  for (ImuSample& s : so.rec.imu) {
-    if (s.t_us >= kFrom_us && s.t_us < kTo_us) s.accel_body_mps2.x += 3.0F;
-  }
+  push_accelerometer(so.rec);
   // WHEN the navigator runs over it
   const test::RunScore s = test::replay(so.rec, Params{});
-  const double e_push = error_at(s, kTo_us);
-  const double e_after = error_at(s, kTo_us + 10000000);
+  const double e_push = error_at(s, kPushTo_us);
+  const double e_after = error_at(s, kPushTo_us + 10000000);
   std::printf("ground_los:3 pushed: error %.2f m at the end of the push, %.3f m 10 s later; integrity fails %u, "
               "inflations %u, re-anchors %u, re-aligns %u, resets %u\n",
               e_push, e_after, s.diag.integrity_fails, s.diag.inflations, s.diag.reanchors, s.diag.reinits,
@@ -88,15 +94,11 @@ TEST(NavigatorIntegrity, WithSparseRangingTheShortRangeTestBringsAPushedFilterBa
     last_us = r.range.t_us;
   }
   so.rec.uwb = thinned;
-  constexpr uint64_t kFrom_us = 40000000;
-  constexpr uint64_t kTo_us = 42000000;
-  for (ImuSample& s : so.rec.imu) {
-    if (s.t_us >= kFrom_us && s.t_us < kTo_us) s.accel_body_mps2.x += 3.0F;
-  }
+  push_accelerometer(so.rec);
   // WHEN the navigator runs over it
   const test::RunScore s = test::replay(so.rec, Params{});
-  const double e_push = error_at(s, kTo_us);
-  const double e_after = error_at(s, kTo_us + 20000000);
+  const double e_push = error_at(s, kPushTo_us);
+  const double e_after = error_at(s, kPushTo_us + 20000000);
   std::printf("ground_los:3 pushed, 2 ranges/s: error %.2f m at the end of the push, %.3f m 20 s later; short-range "
               "fails %u, integrity fails %u, inflations %u, re-anchors %u, re-aligns %u, resets %u\n",
               e_push, e_after, s.diag.short_range_fails, s.diag.integrity_fails, s.diag.inflations, s.diag.reanchors,
