@@ -382,12 +382,12 @@ void Navigator::apply_constraints(uint64_t t_us) {
   if (cv_mode_) {
     // Ranges only. An IMU that is present (aligning, recovering) still tells
     // rest, on any platform (imu_still: quiet and unchanged specific force
-    // since rest was confirmed by the LS track), with a slow filter.
+    // since rest was confirmed by the LS track), with a slow filter. The rest
+    // check ran at the same rate on the latest IMU sample (init_on_imu).
     if (imu_alive(t_us) && levelled_) {
-      rest_.evaluate();
       const bool slow =
           ekf_.state().vel_nav_mps.norm() < kZuptMaxSpeed_mps + Real(2) * std::sqrt(ekf_.cov()(3, 3));
-      cv_rest_latched_ = imu_still(t_us) && slow;
+      cv_rest_latched_ = imu_still_now_ && slow;
       if (cv_rest_latched_) {
         for (int i = 0; i < 3; ++i) (void)fuse(mm_zupt(ekf_.state(), i, cfg_.zupt_sigma));
         return;
@@ -994,10 +994,13 @@ void Navigator::recover(uint64_t t_us, uint8_t min_level) {
     // That attitude comes from a filter that failed, not from a rest window:
     // it is handed over again with the moving-levelling uncertainty.
     levelled_at_rest_ = false;
+    // The track's relative yaws refer to the old levelled attitude.
+    track_head_ = 0;
+    track_count_ = 0;
+    for (auto& f : last_fix_per_tag_) f = TrackFix{};
   }
-  track_head_ = 0;
-  track_count_ = 0;
-  for (auto& f : last_fix_per_tag_) f = TrackFix{};
+  // A ranges-only filter that re-starts keeps the LS track: its fixes do not
+  // depend on the filter, and it is the evidence of motion the rest check needs.
   heading_avg_ = HeadingAverage{};
   gsf_.reset();
   start_cv_filter(t_us, fix, reason);

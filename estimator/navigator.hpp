@@ -179,7 +179,7 @@ class Navigator {
   void begin_imu_recovery();
   bool try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix);
   void try_heading(uint64_t t_us);
-  bool track_moving(uint64_t t_us) const;
+  Real track_speed_bound(uint64_t t_us) const;
   bool imu_still(uint64_t t_us);
   void start_filter(uint64_t t_us, Real yaw_rad, Real yaw_sigma_rad);
   void yaw_bank_on_range(int anchor_index, int tag_index, const UwbRange& range);
@@ -297,6 +297,7 @@ class Navigator {
   Vec3 ba_init_ = Vec3::Zero();     // accelerometer bias carried over a re-alignment [m/s^2]
   Real accel_h_ms_ = Real(0);
   Vec3 rest_ref_body_mps2_ = Vec3::Zero();  // specific force when rest was confirmed (body) [m/s^2]
+  bool imu_still_now_ = false;        // result of the latest rest check (init_on_imu, constraint rate)
   bool rest_ref_valid_ = false;       // EMA of the squared horizontal specific force, levelled frame [(m/s^2)^2]
   TrackFix track_[kTrackCapacity];
   size_t track_head_ = 0;

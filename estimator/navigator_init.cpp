@@ -28,8 +28,10 @@ constexpr Real kCvTurnRateSigma_radps = Real(0.5);  // ranges-only turn rate wit
 constexpr Real kHeadingOffsetDop = Real(1.5);      // two-tag heading average: horizontal DOP of a tag fix under range offsets
 constexpr Real kWeakHeightFactor = Real(5);        // auto height mode, non-planar anchors: sigma multiplier
 constexpr uint64_t kTrackSpacingUs = 200000;      // track: shortest interval between stored fixes (5 Hz) [us]
-constexpr uint64_t kTrackFreshUs = 1000000;       // rest check: LS track span looked at [us]
-constexpr Real kRestTrackDist_m = Real(0.1);       // rest check: allowed track motion beyond noise [m]
+constexpr uint64_t kTrackFreshUs = 1000000;       // rest check: newest LS fix at most this old, else no evidence [us]
+constexpr uint64_t kTrackSpeedWindowUs = 2000000; // rest check: LS track span whose slope is the speed [us]
+constexpr Real kRestTrackSpeed_mps = Real(0.1);    // rest check: confirm only if the track's speed lower bound is below [m/s]
+constexpr Real kRestHoldTrackSpeed_mps = Real(0.3);  // rest check: a confirmed rest ends above this lower bound [m/s]
 constexpr uint64_t kYawBankMinIntervalUs = 25000;  // yaw bank: shortest interval between range updates [us]
 constexpr int kYawBankMinUpdates = 10;             // yaw bank: fewest ranges before it may start the filter
 constexpr Real kYawBankCorrTime_s = Real(1);       // yaw bank: correlation time turning bias/tilt into white noise [s]
@@ -72,6 +74,7 @@ void Navigator::restart(bool counted_reset) {
   ba_init_.setZero();
   accel_h_ms_ = Real(0);
   rest_ref_valid_ = false;
+  imu_still_now_ = false;
   // The latest ranges per pair are kept: the next range can fix again at once.
   for (auto& row : prev_tag_valid_) {
     for (auto& v : row) v = false;
@@ -152,7 +155,8 @@ void Navigator::init_on_imu(const ImuSample& imu) {
   // The IMU alone cannot tell rest from constant velocity or constant
   // acceleration: the UWB track must agree that the vehicle stands still,
   // and the specific force must not have moved since rest was confirmed.
-  if (imu_still(imu.t_us)) {
+  imu_still_now_ = imu_still(imu.t_us);
+  if (imu_still_now_) {
     // Levelling (roll, pitch) and gyro bias from the rest window; keep the relative yaw.
     const Real yaw_rel = levelled_ ? quat_yaw(q_init_) : Real(0);
     q_init_ = quat_mul(quat_from_yaw(yaw_rel), quat_level(rest_.accel_mean()));
@@ -170,36 +174,74 @@ bool Navigator::imu_still(uint64_t t_us) {
   // At rest the body frame does not turn, so the specific force measured in it
   // is constant: rest is confirmed once by a quiet IMU window and an LS track
   // that does not move, then held while the window mean stays within
-  // kRestMaxHorizAccel of the force at confirmation. A smooth pull-away keeps
-  // the IMU window quiet and would otherwise be levelled away as tilt; heavy
-  // NLOS makes the track jump and cannot end a confirmed rest. Call after
-  // rest_.evaluate().
+  // kRestMaxForceChange of the force at confirmation and the track does not
+  // show the vehicle driving. A smooth pull-away keeps the IMU window quiet and
+  // would otherwise be levelled away as tilt; a cruise at constant velocity is
+  // just as quiet (measured: rest latched at 1.2 m/s, the ranges-only filter
+  // held at zero speed and re-started 52 times in 3 min). Single NLOS jumps of
+  // the track stay below the hold's higher bar. Call after rest_.evaluate().
   if (!rest_.at_rest()) {
     rest_ref_valid_ = false;
     return false;
   }
+  const Real speed_bound = track_speed_bound(t_us);
   if (!rest_ref_valid_) {
-    if (track_moving(t_us)) return false;
+    if (speed_bound > kRestTrackSpeed_mps) return false;
     rest_ref_body_mps2_ = rest_.accel_mean();
     rest_ref_valid_ = true;
     return true;
   }
+  if (speed_bound > kRestHoldTrackSpeed_mps) {
+    rest_ref_valid_ = false;
+    return false;
+  }
   return (rest_.accel_mean() - rest_ref_body_mps2_).norm() < kRestMaxForceChange_mps2;
 }
 
-bool Navigator::track_moving(uint64_t t_us) const {
-  if (track_count_ == 0) return false;
+Real Navigator::track_speed_bound(uint64_t t_us) const {
+  // Lower bound of the horizontal speed the LS track shows over the last
+  // kTrackSpeedWindowUs: the least-squares slope of the fixes of the newest
+  // tag against time, less three of its standard deviations (fix sigmas taken
+  // as independent). Zero when the track is too short or stale to tell: no
+  // evidence of motion (sparse ranging forms few fixes; rest is then judged by
+  // the IMU alone, as before).
+  if (track_count_ == 0) return Real(0);
   const size_t newest = (track_head_ + kTrackCapacity - 1) % kTrackCapacity;
   const TrackFix& fn = track_[newest];
-  if (t_us - fn.t_us > kTrackFreshUs) return false;  // no recent fixes: no evidence of motion
-  for (size_t k = 1; k < track_count_; ++k) {
+  if (t_us - fn.t_us > kTrackFreshUs) return Real(0);
+  // Two passes over at most kTrackCapacity fixes: means, then the slope sums.
+  Real n = Real(0), t_mean = Real(0), sig2 = Real(0);
+  Vec3 p_mean = Vec3::Zero();
+  uint64_t oldest_us = fn.t_us;
+  for (size_t k = 0; k < track_count_; ++k) {
     const TrackFix& f = track_[(newest + kTrackCapacity - k) % kTrackCapacity];
+    if (fn.t_us - f.t_us > kTrackSpeedWindowUs) break;
     if (f.tag_index != fn.tag_index) continue;
-    if (fn.t_us - f.t_us > kTrackFreshUs) break;
-    const Real d = (fn.tag_pos_nav_m - f.tag_pos_nav_m).head<2>().norm();
-    if (d > Real(3) * (fn.sigma_h_m + f.sigma_h_m) + kRestTrackDist_m) return true;
+    const Real dt = -static_cast<Real>(static_cast<uint32_t>(fn.t_us - f.t_us)) * Real(1e-6);
+    n += Real(1);
+    t_mean += dt;
+    p_mean += f.tag_pos_nav_m;
+    sig2 += f.sigma_h_m * f.sigma_h_m;
+    oldest_us = f.t_us;
   }
-  return false;
+  if (n < Real(3) || fn.t_us - oldest_us < kTrackSpeedWindowUs / 2) return Real(0);
+  t_mean /= n;
+  p_mean /= n;
+  sig2 /= n;
+  Real stt = Real(0);
+  Vec3 stp = Vec3::Zero();
+  for (size_t k = 0; k < track_count_; ++k) {
+    const TrackFix& f = track_[(newest + kTrackCapacity - k) % kTrackCapacity];
+    if (fn.t_us - f.t_us > kTrackSpeedWindowUs) break;
+    if (f.tag_index != fn.tag_index) continue;
+    const Real dt = -static_cast<Real>(static_cast<uint32_t>(fn.t_us - f.t_us)) * Real(1e-6) - t_mean;
+    stt += dt * dt;
+    stp += dt * (f.tag_pos_nav_m - p_mean);
+  }
+  if (!(stt > Real(0))) return Real(0);
+  const Real speed = stp.head<2>().norm() / stt;
+  const Real speed_sigma = std::sqrt(sig2 / stt);
+  return std::fmax(speed - Real(3) * speed_sigma, Real(0));
 }
 
 bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix) {
@@ -392,7 +434,7 @@ void Navigator::yaw_bank_on_range(int anchor_index, int tag_index, const UwbRang
     const TrackFix& fix = track_[(track_head_ + kTrackCapacity - 1) % kTrackCapacity];
     const bool ground = site_.platform == Platform::kGround;
     const Real pos_v = fix.sigma_v_m > Real(0) ? fix.sigma_v_m : (ground ? Real(0.2) : Real(1.0));
-    const Real vel_sigma = levelled_at_rest_ && !track_moving(range.t_us) ? Real(0.2) : cfg_.init_speed;
+    const Real vel_sigma = levelled_at_rest_ && !(track_speed_bound(range.t_us) > kRestTrackSpeed_mps) ? Real(0.2) : cfg_.init_speed;
     gsf_.start(fix.tag_pos_nav_m, c_lvl * lever(fix.tag_index), Real(0),
                fix.sigma_h_m * std::sqrt(Real(0.5)) + Real(0.05), pos_v, std::fmax(vel_sigma, Real(0.2)));
     return;

@@ -355,12 +355,16 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
   // which the consistent ranges dominate. It ends when the share exceeds verify_frac.
   // The filter's covariance is honest by construction (range-error states, learned
   // noise, recovery by inflation in the Navigator), so a new filter starts trusted.
-  if (ctx.filter_ready && escape_us_ > 0) {
-    if (std::isfinite(e.z)) {
-      constexpr float kShareGain = 0.02F;  // EMA over about 50 ranges
-      const bool agrees = e.z < resid_th_;
-      los_share_ += kShareGain * ((agrees ? 1.0F : 0.0F) - los_share_);
-    }
+  // A filter that is not ready (large covariance) can starve just as well: its
+  // coarse evidence reads its own lagging speed and flags every range (measured:
+  // a pull-away at 2 m/s^2 under 47 % NLOS, no range fused for 15 s, 140 m off).
+  // Its normalised innovation is honest (S carries the large covariance).
+  const float z = std::isfinite(e.z) ? e.z
+                  : ctx.innovation_var_m2 > 0.0F ? std::fabs(ctx.innovation_m) / std::sqrt(ctx.innovation_var_m2)
+                                                 : kNaNf;
+  if (escape_us_ > 0 && std::isfinite(z)) {
+    constexpr float kShareGain = 0.02F;  // EMA over about 50 ranges
+    los_share_ += kShareGain * ((z < resid_th_ ? 1.0F : 0.0F) - los_share_);
     if (!seen_ready_) {
       seen_ready_ = true;
       last_pass_t_us_ = ctx.range.t_us;
@@ -379,11 +383,11 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
       // filter-independent channel evidence. While the filter disagrees with most ranges
       // (share below drift_frac) or passes none (starved), every range is admitted.
       const bool channel_nlos = e.p_chan > default_nlos_;
-      const bool in_gate = e.z <= innov_gate_sigma_;
+      const bool in_gate = z <= innov_gate_sigma_;
       const bool admit_all = starved || los_share_ < drift_frac_;
       d.use = std::isfinite(ctx.innovation_m) && !channel_nlos && (in_gate || admit_all);
       if (d.use) {
-        const float factor = residual_inflation_factor(e.z, resid_th_, resid_beta_);
+        const float factor = residual_inflation_factor(z, resid_th_, resid_beta_);
         d.r_scale = std::isfinite(factor) ? std::fmax(factor, escape_r_scale_) : escape_r_scale_;
         ++slot.stats.escape_count;
         if (in_gate) last_pass_t_us_ = ctx.range.t_us;

@@ -25,6 +25,17 @@ double error_at(const test::RunScore& s, uint64_t t_us) {
   return NAN;
 }
 
+// Largest horizontal error of the published position over [t0_us, t1_us].
+double max_error(const test::RunScore& s, uint64_t t0_us, uint64_t t1_us) {
+  double m = 0.0;
+  for (const test::ScoredOutput& o : s.outputs) {
+    if (o.out.t_us >= t0_us && o.out.t_us <= t1_us && o.has_truth) {
+      m = std::max(m, std::hypot(o.err_nav_m[0], o.err_nav_m[1]));
+    }
+  }
+  return m;
+}
+
 // The push of the recovery tests: the accelerometer reads 3 m/s^2 too much
 // along body x for 2 s from t = 40 s.
 constexpr uint64_t kPushFrom_us = 40000000;
@@ -65,14 +76,16 @@ TEST(NavigatorIntegrity, AFilterPushedOffItsRangesIsBroughtBackWithoutAReset) {
   push_accelerometer(so.rec);
   // WHEN the navigator runs over it
   const test::RunScore s = test::replay(so.rec, Params{});
-  const double e_push = error_at(s, kPushTo_us);
+  const double e_push = max_error(s, kPushFrom_us, kPushTo_us + 3000000);
   const double e_after = error_at(s, kPushTo_us + 10000000);
-  std::printf("ground_los:3 pushed: error %.2f m at the end of the push, %.3f m 10 s later; integrity fails %u, "
+  std::printf("ground_los:3 pushed: error up to %.2f m during and after the push, %.3f m 10 s later; integrity fails %u, "
               "inflations %u, re-anchors %u, re-aligns %u, resets %u\n",
               e_push, e_after, s.diag.integrity_fails, s.diag.inflations, s.diag.reanchors, s.diag.reinits,
               s.diag.resets);
-  // THEN the integrity check sees ranges shorter than the filter's distances,
-  // and the output is back within 0.3 m 10 s later, without a hard reset
+  // THEN the push carries the filter more than 1 m off, and the recovery
+  // ladder (inflation, the gate's robust mode, the integrity check when ranges
+  // are shorter than the filter's distances) brings the output back within
+  // 0.3 m 10 s later, without a hard reset
   EXPECT_TRUE(s.all_finite);
   EXPECT_GT(e_push, 1.0);
   EXPECT_LT(e_after, 0.3);
