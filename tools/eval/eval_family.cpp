@@ -203,6 +203,7 @@ CellSummary summarise_cell(const std::string& name, const std::vector<DriveMetri
   std::vector<double> rmse, mx, p95, ttfe;
   size_t epochs = 0, good = 0, hon = 0, in_h = 0, in_x = 0, in_y = 0, nees_n = 0, nees_in = 0, nis_n = 0, nis_in = 0;
   size_t err_n = 0, fb_n = 0;
+  double err_sq = 0.0;
   double nees_sum = 0, nis_sum = 0, fb_sq = 0;
   uint64_t resets = 0, reinits = 0, inflations = 0, reanchors = 0, used = 0, rejected = 0;
   Confusion conf;
@@ -221,6 +222,7 @@ CellSummary summarise_cell(const std::string& name, const std::vector<DriveMetri
     epochs += d.epochs;
     good += d.good;
     err_n += d.err_n;
+    err_sq += d.err_sq_sum;
     hon += d.hon_n;
     in_h += d.in2s_h;
     in_x += d.in2s_x;
@@ -262,6 +264,8 @@ CellSummary summarise_cell(const std::string& name, const std::vector<DriveMetri
   c.reanchors_per_h = ratio(static_cast<double>(reanchors), c.hours);
   c.fallback_share = ratio(static_cast<double>(fb_n), static_cast<double>(err_n));
   c.fallback_rmse = fb_n > 0 ? std::sqrt(fb_sq / static_cast<double>(fb_n)) : std::nan("");
+  c.inertial_rmse =
+      err_n > fb_n ? std::sqrt(std::max(err_sq - fb_sq, 0.0) / static_cast<double>(err_n - fb_n)) : std::nan("");
   c.fused_share = ratio(static_cast<double>(used), static_cast<double>(used + rejected));
   c.nlos_precision = conf.precision();
   c.nlos_recall = conf.recall();
@@ -329,7 +333,7 @@ void print_family_tables(std::FILE* f, const std::vector<CellSummary>& rows, boo
     t2.push_back({c.name, pct(c.in2s_h), pct(c.in2s_x), pct(c.in2s_y), num(c.nees_mean, 2), pct(c.nees_in),
                   num(c.nis_mean, 2), pct(c.nis_in), num(c.resets_per_h, 1), num(c.inflations_per_h, 1),
                   num(c.reanchors_per_h, 1), num(c.reinits_per_h, 1),
-                  pct(c.fallback_share), num(c.fallback_rmse, 3), pct(c.fused_share), pct(c.nlos_precision),
+                  pct(c.fallback_share), num(c.fallback_rmse, 3), num(c.inertial_rmse, 3), pct(c.fused_share), pct(c.nlos_precision),
                   pct(c.nlos_recall)});
   }
   std::fprintf(f, "%sAccuracy and availability (horizontal error of the body origin; medians and worst over drives)%s\n\n",
@@ -342,7 +346,7 @@ void print_family_tables(std::FILE* f, const std::vector<CellSummary>& rows, boo
                markdown ? "**" : "", markdown ? "**" : "");
   print_table(f,
               {"cell", "in 2sig h", "in 2sig x", "in 2sig y", "NEES mean", "NEES<=5.99", "NIS mean", "NIS<=3.84",
-               "resets/h", "inflate/h", "re-anchor/h", "re-align/h", "fallback", "fallback RMSE [m]", "fused", "NLOS P", "NLOS R"},
+               "resets/h", "inflate/h", "re-anchor/h", "re-align/h", "fallback", "fallback RMSE [m]", "IMU filter RMSE [m]", "fused", "NLOS P", "NLOS R"},
               t2, markdown);
 }
 

@@ -78,6 +78,7 @@ struct CellSummary {
   double resets_per_h = 0.0, reinits_per_h = 0.0;  // per hour of drive
   double inflations_per_h = 0.0, reanchors_per_h = 0.0;
   double fallback_share = 0.0, fallback_rmse = 0.0;
+  double inertial_rmse = 0.0;  // pooled horizontal RMSE of the epochs published by the IMU filter [m]
   double fused_share = 0.0;
   double nlos_precision = 0.0, nlos_recall = 0.0;
 };
