@@ -225,9 +225,9 @@ Real EkfCore::prepare(const ErrRow& h) {
   return hph_;
 }
 
-UpdateResult EkfCore::update(const ScalarObs& obs) {
+UpdateResult EkfCore::update(const ScalarObs& obs, bool consider_range_errors) {
   (void)prepare(obs.h);
-  return update_prepared(obs.innovation, obs.r_var);
+  return update_prepared(obs.innovation, obs.r_var, consider_range_errors);
 }
 
 UpdateResult EkfCore::update_prepared(Real innovation, Real r_var, bool consider_range_errors) {

@@ -91,8 +91,8 @@ class EkfCore {
   // covariance update is the Joseph form written for a scalar with the optimal
   // gain, P+ = P - u u^T / S with u = P H^T (algebraically identical to
   // (I-KH)P(I-KH)^T + K R K^T), exactly symmetric; refused when it would
-  // drive a variance negative.
-  UpdateResult update(const ScalarObs& obs);
+  // drive a variance negative. consider_range_errors as in update_prepared().
+  UpdateResult update(const ScalarObs& obs, bool consider_range_errors = false);
 
   // Clamps variances to [floor, ceiling] (row/column scaling keeps P positive
   // semi-definite) and symmetrises (scalar updates keep P exactly symmetric,

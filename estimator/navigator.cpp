@@ -433,7 +433,15 @@ void Navigator::apply_constraints(uint64_t t_us) {
   }
 }
 
-bool Navigator::fuse(const ScalarObs& obs) { return ekf_.update(obs).applied; }
+bool Navigator::fuse(const ScalarObs& obs) {
+  // The ranges-only filter without an IMU learns no range error: its ranges
+  // treat them as consider states (docs/ekf.md "Range errors"), and so do its
+  // pseudo-measurements (height, NHC). Through the cross covariances those
+  // consider updates build, a full update would move every offset with each
+  // height innovation (measured on a self-calibrated trolley at rest: anchor
+  // offsets 0.23 m off within 1 s, two anchors then gated out for good).
+  return ekf_.update(obs, cv_mode_ && !imu_alive(t_state_us_)).applied;
+}
 
 void Navigator::bridge_outage(uint64_t t_us, const Vec3& accel_mean_body_mps2, const Vec3& gyro_mean_body_radps,
                               Real dt_s) {
@@ -621,6 +629,7 @@ RangeReport Navigator::on_range(const UwbRange& range) {
   as.last_t_us = range.t_us;
   as.last_range_m = range.range_m;
   pair_[ai][ti] = PairRange{range.t_us, range.range_m, true};
+  range_rate_on_range(ai, ti, range.t_us, range.range_m);
 
   if (phase_ != Phase::kRunning) {
     // No filter yet: the first LS fix starts the ranges-only filter at once.

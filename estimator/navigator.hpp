@@ -164,6 +164,19 @@ class Navigator {
     Real yaw_rel_rad = Real(0); // gyro-integrated yaw of the levelled attitude at t_us
     int tag_index = -1;
   };
+  // Least-squares range rate of one anchor over a block of up to
+  // kTrackSpeedWindowUs (rest check): sums relative to the block's first
+  // range, ranges of one tag only (the block's), and the speed lower bound
+  // of the previous block, which ended where this one started.
+  struct RangeRateBlock {
+    uint64_t t0_us = 0;          // first range of the block [us]
+    float r0_m = 0.0F;           // its range [m]
+    float t_last_s = 0.0F;       // newest range, from t0 [s]
+    float st = 0.0F, sr = 0.0F, stt = 0.0F, str = 0.0F, srr = 0.0F;  // sums of t [s], r - r0 [m]
+    float prev_bound_mps = 0.0F; // speed lower bound of the previous block [m/s]
+    uint16_t n = 0;
+    int8_t tag_index = -1;       // -1: no block
+  };
   // An anchor-offset state slot lent to an anchor (ErrIdx::kAnchorBias + slot).
   struct BiasSlot {
     int anchor_index = -1;          // -1: free
@@ -179,7 +192,11 @@ class Navigator {
   void begin_imu_recovery();
   bool try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix);
   void try_heading(uint64_t t_us);
+  Real speed_lower_bound(uint64_t t_us) const;
   Real track_speed_bound(uint64_t t_us) const;
+  void range_rate_on_range(int anchor_index, int tag_index, uint64_t t_us, float range_m);
+  Real range_rate_bound(const RangeRateBlock& b) const;
+  Real range_rate_speed_bound(uint64_t t_us) const;
   bool imu_still(uint64_t t_us);
   void start_filter(uint64_t t_us, Real yaw_rad, Real yaw_sigma_rad);
   void yaw_bank_on_range(int anchor_index, int tag_index, const UwbRange& range);
@@ -288,6 +305,7 @@ class Navigator {
 
   // Initialisation / alignment state.
   PairRange pair_[kMaxAnchors][kMaxTags];
+  RangeRateBlock range_rate_[kMaxAnchors];  // kept over restarts: the ranges, not the filter
   uint64_t first_range_t_us_ = 0;
   uint64_t first_imu_t_us_ = 0;
   bool levelled_ = false;

@@ -184,7 +184,7 @@ bool Navigator::imu_still(uint64_t t_us) {
     rest_ref_valid_ = false;
     return false;
   }
-  const Real speed_bound = track_speed_bound(t_us);
+  const Real speed_bound = speed_lower_bound(t_us);
   if (!rest_ref_valid_) {
     if (speed_bound > kRestTrackSpeed_mps) return false;
     rest_ref_body_mps2_ = rest_.accel_mean();
@@ -196,6 +196,89 @@ bool Navigator::imu_still(uint64_t t_us) {
     return false;
   }
   return (rest_.accel_mean() - rest_ref_body_mps2_).norm() < kRestMaxForceChange_mps2;
+}
+
+Real Navigator::speed_lower_bound(uint64_t t_us) const {
+  // Evidence of motion for the rest check: the LS track needs three anchors
+  // at once; a single anchor's range rate bounds the speed from below too
+  // (|dr/dt| <= tag speed), and keeps telling a constant-speed cruise from
+  // rest while two of four anchors are blocked (measured without it: rest
+  // latched at 2 m/s on a road with two anchors in view, the ranges-only
+  // filter held at zero speed 21 m behind, 35 re-alignments in 11 min).
+  return std::fmax(track_speed_bound(t_us), range_rate_speed_bound(t_us));
+}
+
+void Navigator::range_rate_on_range(int anchor_index, int tag_index, uint64_t t_us, float range_m) {
+  RangeRateBlock& b = range_rate_[anchor_index];
+  const bool gap = b.tag_index < 0 || t_us < b.t0_us ||
+                   t_us - b.t0_us > kTrackSpeedWindowUs + kTrackFreshUs ||
+                   static_cast<Real>(t_us - b.t0_us) * Real(1e-6) - static_cast<Real>(b.t_last_s) > (static_cast<Real>(kTrackFreshUs) * Real(1e-6));
+  if (gap || t_us - b.t0_us > kTrackSpeedWindowUs) {
+    // Block complete (its bound is kept for the next one) or stale (no evidence).
+    const float bound = gap ? 0.0F : static_cast<float>(range_rate_bound(b));
+    b = RangeRateBlock{};
+    b.prev_bound_mps = bound;
+    b.t0_us = t_us;
+    b.r0_m = range_m;
+    b.tag_index = static_cast<int8_t>(tag_index);
+  }
+  if (tag_index != b.tag_index) return;
+  const float t = static_cast<float>(t_us - b.t0_us) * 1e-6F;
+  const float r = range_m - b.r0_m;
+  b.t_last_s = t;
+  b.st += t;
+  b.sr += r;
+  b.stt += t * t;
+  b.str += t * r;
+  b.srr += r * r;
+  ++b.n;
+}
+
+Real Navigator::range_rate_bound(const RangeRateBlock& b) const {
+  // |LS slope| less three of its standard deviations; the ranges' sigma is the
+  // larger of the learnt LOS noise and the fit's own residual scatter (an NLOS
+  // step inside the block widens the bound instead of faking motion).
+  if (b.n < 3) return Real(0);
+  const Real n = static_cast<Real>(b.n);
+  const Real t_mean = static_cast<Real>(b.st) / n;
+  const Real r_mean = static_cast<Real>(b.sr) / n;
+  const Real stt = static_cast<Real>(b.stt) - n * t_mean * t_mean;
+  const Real str = static_cast<Real>(b.str) - n * t_mean * r_mean;
+  const Real srr = static_cast<Real>(b.srr) - n * r_mean * r_mean;
+  if (!(stt > Real(1e-6))) return Real(0);
+  const Real slope = str / stt;
+  const Real resid_var = n > Real(2) ? std::fmax(srr - slope * str, Real(0)) / (n - Real(2)) : Real(0);
+  const Real var = std::fmax(r_los_m2_, resid_var);
+  return std::fmax(std::fabs(slope) - Real(3) * std::sqrt(var / stt), Real(0));
+}
+
+Real Navigator::range_rate_speed_bound(uint64_t t_us) const {
+  // Per anchor: the running block once it spans half the window (and its
+  // newest range is fresh), else the previous block if it ended within half a
+  // window. The second largest bound over the anchors: one anchor's range can
+  // drift under a growing NLOS bias (measured with the largest: rest not
+  // confirmed at a start in NLOS, the ranges-only filter pulled 13 m away).
+  Real best = Real(0), second = Real(0);
+  const size_t n = site_.num_anchors < kMaxAnchors ? site_.num_anchors : kMaxAnchors;
+  for (size_t i = 0; i < n; ++i) {
+    const RangeRateBlock& b = range_rate_[i];
+    if (b.tag_index < 0 || t_us < b.t0_us) continue;
+    const Real age_s = static_cast<Real>(t_us - b.t0_us) * Real(1e-6);
+    const Real span_s = static_cast<Real>(b.t_last_s);
+    Real bound = Real(0);
+    if (span_s >= (static_cast<Real>(kTrackSpeedWindowUs / 2) * Real(1e-6)) && age_s - span_s <= (static_cast<Real>(kTrackFreshUs) * Real(1e-6))) {
+      bound = range_rate_bound(b);
+    } else if (age_s <= (static_cast<Real>(kTrackSpeedWindowUs / 2) * Real(1e-6))) {
+      bound = static_cast<Real>(b.prev_bound_mps);
+    }
+    if (bound > best) {
+      second = best;
+      best = bound;
+    } else if (bound > second) {
+      second = bound;
+    }
+  }
+  return second;
 }
 
 Real Navigator::track_speed_bound(uint64_t t_us) const {
@@ -434,7 +517,7 @@ void Navigator::yaw_bank_on_range(int anchor_index, int tag_index, const UwbRang
     const TrackFix& fix = track_[(track_head_ + kTrackCapacity - 1) % kTrackCapacity];
     const bool ground = site_.platform == Platform::kGround;
     const Real pos_v = fix.sigma_v_m > Real(0) ? fix.sigma_v_m : (ground ? Real(0.2) : Real(1.0));
-    const Real vel_sigma = levelled_at_rest_ && !(track_speed_bound(range.t_us) > kRestTrackSpeed_mps) ? Real(0.2) : cfg_.init_speed;
+    const Real vel_sigma = levelled_at_rest_ && !(speed_lower_bound(range.t_us) > kRestTrackSpeed_mps) ? Real(0.2) : cfg_.init_speed;
     gsf_.start(fix.tag_pos_nav_m, c_lvl * lever(fix.tag_index), Real(0),
                fix.sigma_h_m * std::sqrt(Real(0.5)) + Real(0.05), pos_v, std::fmax(vel_sigma, Real(0.2)));
     return;

@@ -16,6 +16,7 @@
 #include "estimator/nav_harness.hpp"
 #include "tools/calib/calibrate.hpp"
 #include "tools/dataset/calibration.hpp"
+#include "tools/sim/family.hpp"
 
 namespace uwbnav::testing {
 namespace {
@@ -98,7 +99,7 @@ TEST(TrolleyPose, CommissionedTrolleyWithoutImuTakesItsHeadingFromTheTagsFusesTh
               p.rmse_h_m, p.max_h_m, p.heading_p90_deg, 100.0 * p.heading_share, 100.0 * p.inside_2sigma,
               100.0 * p.fused);
   // THEN issue 19's targets hold after the first stop, except the heading's
-  // 90th percentile (target 5 deg, measured 6.1 deg: the ranging noise on
+  // 90th percentile (target 5 deg, measured 5.9 deg: the ranging noise on
   // 0.3 m baselines; 8.9 deg without the turn-rate state, 90 deg and more
   // without the averaged two-tag heading)
   EXPECT_LT(p.rmse_h_m, 0.08);
@@ -106,6 +107,41 @@ TEST(TrolleyPose, CommissionedTrolleyWithoutImuTakesItsHeadingFromTheTagsFusesTh
   EXPECT_LT(p.heading_p90_deg, 8.0);
   EXPECT_GT(p.inside_2sigma, 0.90);
   EXPECT_GT(p.fused, 0.95);
+}
+
+TEST(TrolleyPose, HeightConstraintDoesNotTeachTheRangeOffsetsOfARangesOnlyFilterAtRest) {
+  // GIVEN a tuning drive of the trolley3 family cell (seed 56), commissioned
+  // by self-calibration on itself; it stands still for its first 14 s. The
+  // ranges-only filter treats the range-error states as consider states in
+  // its range updates; its height pseudo-measurement used to update them
+  // fully, through the cross covariances those consider updates build: within
+  // 1 s at rest the offsets of anchors 3-5 moved 0.19-0.23 m (2 sigma), the
+  // position 0.11 m, anchors 4 and 5 then read +0.3 m long and were gated out
+  // as NLOS for the rest of the drive (RMSE 0.173 m, 55 % inside 2 sigma)
+  sim::SimOutput so;
+  std::string err;
+  ASSERT_EQ(sim::simulate_family("trolley3", 56, sim::FamilyOptions{}, so, &err), Status::kOk) << err;
+  calib::Options opt;
+  opt.method = calib::Method::kSelf;
+  calib::Result cal;
+  ASSERT_EQ(calib::calibrate({so.rec}, opt, cal, &err), Status::kOk) << err;
+  const dataset::CalibrationFile file = calib::to_calibration_file(cal, {"trolley3_56"});
+  dataset::Recording rec = so.rec;
+  std::vector<std::string> errors;
+  ASSERT_EQ(dataset::check_calibration(file, rec.site, "t.cal", errors), Status::kOk) << errors.at(0);
+  dataset::apply_calibration(file, rec.site);
+  // WHEN the navigator runs it with the calibration loaded
+  const test::RunScore s = test::replay(rec, Params{});
+  ASSERT_TRUE(s.all_finite);
+  const PoseScore p = score(rec, s, 0.0);
+  std::printf("trolley3:56 commissioned: rmse %.3f m, max %.3f m, in 2 sigma %.1f %%, fused %.1f %%\n", p.rmse_h_m,
+              p.max_h_m, 100.0 * p.inside_2sigma, 100.0 * p.fused);
+  // THEN the offsets stay where the ranges put them: the whole drive is as
+  // accurate as the commissioned trolley's target, and honest
+  EXPECT_LT(p.rmse_h_m, 0.08);
+  EXPECT_LT(p.max_h_m, 0.25);
+  EXPECT_GT(p.inside_2sigma, 0.90);
+  EXPECT_GT(p.fused, 0.85);
 }
 
 TEST(TrolleyPose, UncalibratedTrolleyDoesNotClaimAHeadingItsTagsCannotGive) {

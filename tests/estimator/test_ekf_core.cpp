@@ -104,6 +104,32 @@ TEST(EkfCore, ScalarUpdateShrinksVarianceAndCorrectsState) {
   EXPECT_NEAR(static_cast<double>(ekf.state().pos_nav_m.x()), 0.25, 1e-6);
 }
 
+TEST(EkfCore, ConsiderUpdateOfACoreObservationLeavesCorrelatedRangeErrorsAlone) {
+  // A height-like observation of z, with z correlated with an anchor offset
+  // (as consider range updates leave them): the full update moves the offset
+  // through the correlation, the consider update moves only the core states
+  // and keeps the offset's own variance, as Navigator::fuse needs for the
+  // ranges-only filter's pseudo-measurements.
+  EkfCore full;
+  full.init(NominalState{}, ErrVec::Ones());
+  const int z = ErrIdx::kPos + 2;
+  const int off = ErrIdx::kAnchorBias;
+  full.mutable_cov()(z, off) = Real(0.8);
+  full.mutable_cov()(off, z) = Real(0.8);
+  EkfCore consider = full;
+  ScalarObs obs;
+  obs.h(z) = Real(1);
+  obs.innovation = Real(-0.3);
+  obs.r_var = Real(0.01);
+  ASSERT_TRUE(full.update(obs).applied);
+  ASSERT_TRUE(consider.update(obs, true).applied);
+  EXPECT_LT(full.state().anchor_bias_m(0), Real(-0.2));
+  EXPECT_EQ(consider.state().anchor_bias_m(0), Real(0));
+  EXPECT_EQ(consider.cov()(off, off), Real(1));
+  EXPECT_NEAR(static_cast<double>(consider.state().pos_nav_m.z()), static_cast<double>(full.state().pos_nav_m.z()), 1e-6);
+  EXPECT_LT(consider.cov()(z, z), Real(0.02));
+}
+
 TEST(EkfCore, NonFiniteObservationIsRefused) {
   EkfCore ekf;
   ekf.init(NominalState{}, ErrVec::Ones());

@@ -47,16 +47,21 @@ void push_accelerometer(dataset::Recording& rec) {
 }
 
 TEST(NavigatorIntegrity, NlosLengthenedRangesDoNotReanchorAnAccurateFilter) {
-  // GIVEN a tuning drive of the NLOS lot (family ground_nlos, seed 7) where two
-  // of the four anchors range up to 5 m long at once while the filter tracks
-  // the other two: an LS fix from the latest range of each anchor then lies
-  // 2-3 m off and still passes its own chi-square (two faults, two degrees of freedom)
+  // GIVEN a tuning drive of the NLOS lot (family ground_nlos, seed 6) where two
+  // of the four anchors range long at once while the filter tracks the other
+  // two: an LS fix from the latest range of each anchor then lies metres off
+  // and still passes its own chi-square (two faults, two degrees of freedom).
+  // Measured with the check failing on the chi-square alone: 5 integrity
+  // failures, 1 re-anchor, 2 re-alignments, RMSE 0.23 m instead of 0.08 m on
+  // this drive. (Seed 7, where this was first
+  // seen, now takes a worse chord heading at its pull-away, and a re-anchor
+  // there is right.)
   sim::SimOutput so;
   std::string err;
-  ASSERT_EQ(sim::simulate_family("ground_nlos", 7, sim::FamilyOptions{}, so, &err), Status::kOk) << err;
+  ASSERT_EQ(sim::simulate_family("ground_nlos", 6, sim::FamilyOptions{}, so, &err), Status::kOk) << err;
   // WHEN the navigator runs over it
   const test::RunScore s = test::replay(so.rec, Params{});
-  std::printf("ground_nlos:7: rmse_h %.3f m, integrity fails %u, inflations %u, re-anchors %u, re-aligns %u\n",
+  std::printf("ground_nlos:6: rmse_h %.3f m, integrity fails %u, inflations %u, re-anchors %u, re-aligns %u\n",
               s.rmse_h_m, s.diag.integrity_fails, s.diag.inflations, s.diag.reanchors, s.diag.reinits);
   // THEN a disagreement that NLOS-lengthened ranges explain is no integrity
   // failure: the filter is neither re-anchored to the pulled fix nor re-aligned
