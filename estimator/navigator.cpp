@@ -133,6 +133,7 @@ Status Navigator::configure(const SiteConfig& site, const Params& params) {
   for (auto& row : pair_) {
     for (auto& p : row) p = PairRange{};
   }
+  for (auto& b : range_rate_) b = RangeRateBlock{};  // indices may name other anchors now
   first_range_t_us_ = 0;
   r_los_m2_ = cfg_.uwb_sigma_m * cfg_.uwb_sigma_m;
   r_diff_m2_ = r_los_m2_;
