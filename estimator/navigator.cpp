@@ -999,6 +999,7 @@ void Navigator::recover(uint64_t t_us, uint8_t min_level) {
   if (!cv_mode_) {
     q_init_ = ekf_.state().q_nav_body;
     bg_init_ = ekf_.state().bg_body_radps;
+    bg_ref_ = bg_init_;
     ba_init_ = ekf_.state().ba_body_mps2;
     levelled_ = true;
     // That attitude comes from a filter that failed, not from a rest window:

@@ -202,6 +202,7 @@ class Navigator {
   void yaw_bank_on_range(int anchor_index, int tag_index, const UwbRange& range);
   YawGsf::Noise yaw_bank_noise() const;
   Real levelled_tilt_sigma() const;
+  Vec3 levelled_gyro_bias_sigma() const;
   Status robust_ls_fix(LsRange* ranges, size_t n, const LsOptions& opt, LsFix& ls) const;
   void setup_height(Real origin_z_m);
   void start_cv_filter(uint64_t t_us, const TrackFix& fix, NavMode reason);
@@ -312,6 +313,7 @@ class Navigator {
   bool levelled_at_rest_ = false;
   Quat q_init_ = Quat(1, 0, 0, 0);  // levelled attitude, yaw relative to the unknown start yaw
   Vec3 bg_init_ = Vec3::Zero();
+  Vec3 bg_ref_ = Vec3::Zero();      // gyro bias whose 1-sigma is known (rest mean, failed filter's, zero) [rad/s]
   Vec3 ba_init_ = Vec3::Zero();     // accelerometer bias carried over a re-alignment [m/s^2]
   Real accel_h_ms_ = Real(0);
   Vec3 rest_ref_body_mps2_ = Vec3::Zero();  // specific force when rest was confirmed (body) [m/s^2]

@@ -71,6 +71,7 @@ void Navigator::restart(bool counted_reset) {
   levelled_at_rest_ = false;
   q_init_ = Quat(1, 0, 0, 0);
   bg_init_.setZero();
+  bg_ref_.setZero();
   ba_init_.setZero();
   accel_h_ms_ = Real(0);
   rest_ref_valid_ = false;
@@ -161,6 +162,7 @@ void Navigator::init_on_imu(const ImuSample& imu) {
     const Real yaw_rel = levelled_ ? quat_yaw(q_init_) : Real(0);
     q_init_ = quat_mul(quat_from_yaw(yaw_rel), quat_level(rest_.accel_mean()));
     bg_init_ = rest_.gyro_mean();
+    bg_ref_ = bg_init_;
     levelled_ = true;
     levelled_at_rest_ = true;
   } else if (!levelled_ && rest_.window_full() && first_imu_t_us_ != 0 &&
@@ -455,6 +457,7 @@ void Navigator::begin_imu_recovery() {
   levelled_at_rest_ = false;
   q_init_ = Quat(1, 0, 0, 0);
   bg_init_.setZero();
+  bg_ref_.setZero();
   ba_init_.setZero();
   track_head_ = 0;
   track_count_ = 0;
@@ -495,17 +498,38 @@ Real Navigator::levelled_tilt_sigma() const {
   return site_.platform == Platform::kAir ? kTiltSigmaAir_rad : kTiltSigmaMoving_rad;
 }
 
+Vec3 Navigator::levelled_gyro_bias_sigma() const {
+  // The gyro bias handed to the IMU filter is the reference value (the rest
+  // window's mean gyro, 1-sigma 2 mrad/s; else imu.gyro_bias_init about the
+  // failed filter's bias or zero) moved by the multicopter's levelling
+  // integral while it flew. Nothing checks that integral (it also absorbs
+  // tilt and thrust-axis errors): each axis's move counts as uncertainty,
+  // so a bias the integral made up is handed over with the sigma of its size
+  // and the ranges correct it instead of the filter coasting on it.
+  const Real base = levelled_at_rest_ ? std::fmin(cfg_.gyro_bias_init, Real(0.002)) : cfg_.gyro_bias_init;
+  const Vec3 moved = bg_init_ - bg_ref_;
+  return (moved.array().square() + base * base).sqrt().matrix();
+}
+
 YawGsf::Noise Navigator::yaw_bank_noise() const {
   // The models estimate neither accelerometer bias nor tilt: both enter as
   // white acceleration with a 1 s correlation time, on top of the measured
-  // accelerometer noise; the start yaw walks with gyro noise and bias.
+  // accelerometer noise; the start yaw walks with gyro noise and bias. The
+  // gyro bias's uncertainty about the vertical turns the yaw; the levelling
+  // integral's move about the horizontal axes, if wrong, holds the
+  // complementary filter's tilt off by (bias error) / k_p.
   YawGsf::Noise nz;
+  const Vec3 up_body = quat_to_dcm(q_init_).row(2).transpose();
+  const Real bg_vert2 = up_body.cwiseProduct(levelled_gyro_bias_sigma()).squaredNorm();
+  const Vec3 moved = bg_init_ - bg_ref_;
+  const Real up_moved = up_body.dot(moved);
+  const Real moved_horiz2 = std::fmax(moved.squaredNorm() - up_moved * up_moved, Real(0));
   const Real tilt = levelled_tilt_sigma();
-  const Real g_tilt = static_cast<Real>(site_.gravity_mps2) * tilt;
+  const Real tilt2 = tilt * tilt + moved_horiz2 / (kLevelGain_radps * kLevelGain_radps);
+  const Real g = static_cast<Real>(site_.gravity_mps2);
   const Real ba = cfg_.accel_bias_init;
-  nz.accel_psd = std::sqrt(imu_eff_.accel_noise * imu_eff_.accel_noise + (ba * ba + g_tilt * g_tilt) * kYawBankCorrTime_s);
-  const Real bg = levelled_at_rest_ ? std::fmin(cfg_.gyro_bias_init, Real(0.002)) : cfg_.gyro_bias_init;
-  nz.yaw_psd = std::sqrt(imu_eff_.gyro_noise * imu_eff_.gyro_noise + bg * bg * kYawBankCorrTime_s);
+  nz.accel_psd = std::sqrt(imu_eff_.accel_noise * imu_eff_.accel_noise + (ba * ba + g * g * tilt2) * kYawBankCorrTime_s);
+  nz.yaw_psd = std::sqrt(imu_eff_.gyro_noise * imu_eff_.gyro_noise + bg_vert2 * kYawBankCorrTime_s);
   return nz;
 }
 
@@ -797,10 +821,9 @@ void Navigator::start_filter(uint64_t t_us, Real yaw_rad, Real yaw_sigma_rad) {
   ekf_.refresh_dcm();
   ErrVec sigma = ErrVec::Zero();
   const Real tilt = levelled_tilt_sigma();
-  const Real bg = levelled_at_rest_ ? std::fmin(cfg_.gyro_bias_init, Real(0.002)) : cfg_.gyro_bias_init;
   sigma.segment<3>(ErrIdx::kAtt) = Vec3(tilt, tilt, yaw_sigma_rad);
   sigma.segment<3>(ErrIdx::kBa).setConstant(cfg_.accel_bias_init);
-  sigma.segment<3>(ErrIdx::kBg).setConstant(bg);
+  sigma.segment<3>(ErrIdx::kBg) = levelled_gyro_bias_sigma();
   ekf_.decouple_inertial(sigma);
   gating_.on_filter_restart();
   phase_ = Phase::kRunning;
