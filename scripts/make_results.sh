@@ -51,6 +51,12 @@ find docs/results -name 'series_*.csv' -delete -o -name 'track_*.csv' -delete -o
   echo "(the drives have NLOS episodes; issue 19's target of 95 % is for line-of-sight data; the filter never"
   echo "sees the label). The last column is the same drive without calibration (no heading is taken there)."
   echo "Reproduce: \`scripts/trolley_commissioned.sh build/host/bin/uwbnav 1000 1009\`."
+  echo "The claimed 2σ holds in every epoch (issue 19's band is 90-99.9 %): the claim is pessimistic for"
+  echo "two priors an unknown site needs and this simulated site does not exercise. The published body"
+  echo "origin lies 1.0-1.1 m below the tags, and three tags at one height cannot observe tilt, so"
+  echo "\`ekf.level_sigma\` (0.03 rad) alone is 0.03 m per axis; the simulated floor is level. And each"
+  echo "anchor offset keeps \`uwb.survey_sigma\` (0.1 m) on top of the commissioned σ; the site is surveyed"
+  echo "to 2 cm. With both set as such a site would (0.005 rad, 0), tuning drives 21-26 hold 99.4-100 %."
   echo
   bash scripts/trolley_commissioned.sh "$uwbnav" 1000 1009 "$build/trolley_commissioned"
 
