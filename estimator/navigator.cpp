@@ -62,6 +62,10 @@ constexpr Real kIntegrityShortSigma = Real(3);
 constexpr Real kShortSigma = Real(5);
 constexpr Real kShortResetSigma = Real(3);
 constexpr uint32_t kShortMinRanges = 3;
+// ... or kShortAnchorRun consecutive ranges of one anchor fail, whatever the
+// other anchors say (a position error across their lines of sight is
+// invisible to them).
+constexpr uint8_t kShortAnchorRun = 5;
 // Correlation time of the measured horizontal acceleration in the CV model [s].
 constexpr Real kCvAccelCorrTime_s = Real(1);
 // Distance over which a pair's own scale error decorrelates in the offset's random walk [m].
@@ -908,26 +912,39 @@ void Navigator::short_range_test(uint64_t t_us, int anchor_index, Real innovatio
   // least two anchors in a row, with no consistent range in between, say the
   // filter has left its ranges; this test needs no simultaneous ranges, so it
   // also watches sparse ranging, where the integrity check's LS fix never forms.
+  // A consistent range from one anchor does not clear another anchor's run:
+  // an error across its own line of sight is invisible to it.
   if (!(innovation_var_m2 > Real(0))) return;
+  const bool indexed = anchor_index >= 0 && static_cast<size_t>(anchor_index) < kMaxAnchors;
   const Real z = innovation_m / std::sqrt(innovation_var_m2);
   if (!(z < -kShortSigma)) {
     if (std::fabs(z) < kShortResetSigma) {
       short_count_ = 0;
       short_anchor_mask_ = 0;
       short_gap_m2_ = Real(0);
+      if (indexed) short_run_[anchor_index] = 0;
     }
     return;  // long ranges may be NLOS: they neither count nor clear
   }
   ++short_count_;
   short_anchor_mask_ |= 1U << (anchor_index < 31 ? anchor_index : 31);
   short_gap_m2_ = std::fmax(short_gap_m2_, innovation_m * innovation_m);
+  Real run_gap_m2 = Real(0);
+  bool anchor_run = false;
+  if (indexed) {
+    uint8_t& run = short_run_[anchor_index];
+    if (run < kShortAnchorRun) ++run;
+    anchor_run = run >= kShortAnchorRun;
+    run_gap_m2 = innovation_m * innovation_m;
+  }
   const bool two_anchors = (short_anchor_mask_ & (short_anchor_mask_ - 1U)) != 0U;
-  if (short_count_ < kShortMinRanges || !two_anchors) return;
+  if (!anchor_run && (short_count_ < kShortMinRanges || !two_anchors)) return;
   ++diag_.short_range_fails;
-  const Real gap = short_gap_m2_;
+  const Real gap = std::fmax(short_gap_m2_, run_gap_m2);
   short_count_ = 0;
   short_anchor_mask_ = 0;
   short_gap_m2_ = Real(0);
+  for (auto& r : short_run_) r = 0;
   cover_gap(t_us, gap);
 }
 
@@ -949,6 +966,7 @@ void Navigator::recover(uint64_t t_us, uint8_t min_level) {
   short_count_ = 0;
   short_anchor_mask_ = 0;
   short_gap_m2_ = Real(0);
+  for (auto& r : short_run_) r = 0;
   const Real anchor_var = anchor_bias_prior_var();
   if (level == 1) {
     // 1. Inflate: the covariance was too small for what the ranges say.

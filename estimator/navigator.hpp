@@ -352,6 +352,7 @@ class Navigator {
   uint32_t short_count_ = 0;
   uint32_t short_anchor_mask_ = 0;  // bit per anchor index (indices >= 32 share bit 31)
   Real short_gap_m2_ = Real(0);     // largest squared shortfall seen [m^2]
+  uint8_t short_run_[kMaxAnchors] = {};  // consecutive short ranges per anchor (its own consistent range clears) [-]
 
 #if UWBNAV_RBF_BRIDGE
   // Outage bridging: the network, and per outage its pseudo-measurements so far.

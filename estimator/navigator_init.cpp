@@ -19,6 +19,7 @@ constexpr uint64_t kTrackMaxSpanUs = 20000000;    // heading chord: longest time
 constexpr Real kMinChord_m = Real(0.5);            // heading: shortest chord of the LS track [m]
 constexpr Real kChordMinSpeed_mps = Real(1);       // heading: the ranges-only filter must see at least this speed [m/s]
 constexpr Real kMaxChordSpreadRad = Real(0.35);    // heading: largest disagreement between chords [rad]
+constexpr Real kChordMaxAccel_mps2 = Real(5);      // heading: speed a vehicle can gain per second of a chord [m/s^2]
 constexpr Real kMinBaseline_m = Real(0.1);         // two-tag heading: shortest horizontal baseline [m]
 constexpr uint64_t kHeadingSampleGapUs = 300000;  // two-tag heading average: shortest interval between samples (independent fixes) [us]
 constexpr uint64_t kHeadingMaxGapUs = 2000000;    // two-tag heading average: a longer pause starts it again [us]
@@ -91,6 +92,7 @@ void Navigator::restart(bool counted_reset) {
   short_count_ = 0;
   short_anchor_mask_ = 0;
   short_gap_m2_ = Real(0);
+  for (auto& r : short_run_) r = 0;
   first_imu_t_us_ = 0;
   heading_wait_since_us_ = 0;
   last_constraint_us_ = 0;
@@ -610,9 +612,10 @@ void Navigator::try_heading(uint64_t t_us) {
   if (site_.platform != Platform::kGround || track_count_ < 2 || !levelled_) return;
   // Only while the ranges-only filter sees the vehicle drive: at rest, NLOS
   // jumps of the LS track look like chords too.
+  Real speed = Real(0), speed_sigma = Real(0);
   if (cv_mode_) {
-    const Real speed = ekf_.state().vel_nav_mps.head<2>().norm();
-    const Real speed_sigma = std::sqrt(ekf_.cov()(ErrIdx::kVel, ErrIdx::kVel) + ekf_.cov()(ErrIdx::kVel + 1, ErrIdx::kVel + 1));
+    speed = ekf_.state().vel_nav_mps.head<2>().norm();
+    speed_sigma = std::sqrt(ekf_.cov()(ErrIdx::kVel, ErrIdx::kVel) + ekf_.cov()(ErrIdx::kVel + 1, ErrIdx::kVel + 1));
     if (!(speed > kChordMinSpeed_mps && speed > Real(2) * speed_sigma)) return;
   }
   const size_t newest = (track_head_ + kTrackCapacity - 1) % kTrackCapacity;
@@ -629,6 +632,16 @@ void Navigator::try_heading(uint64_t t_us) {
     const Real d = chord.head<2>().norm();
     const Real sig = std::sqrt(end->sigma_h_m * end->sigma_h_m + f.sigma_h_m * f.sigma_h_m);
     if (d < kMinChord_m || d < Real(5) * sig) continue;
+    if (cv_mode_) {
+      // A chord longer than the vehicle can have driven in its time has a
+      // wrong fix at one end (on a road's near-collinear anchors, the mirror
+      // solution across the anchor line): the filter's speed, 3 sigma, the
+      // speed a vehicle can have had more over the chord, and both fixes'
+      // noise. Which end is wrong is not known: no heading from this track
+      // until the chords walked for it no longer reach the wrong fix.
+      const Real dt_s = static_cast<Real>(static_cast<uint32_t>(end->t_us - f.t_us)) * Real(1e-6);
+      if (d > (speed + Real(3) * speed_sigma + kChordMaxAccel_mps2 * dt_s) * dt_s + Real(3) * sig) return;
+    }
     const Real turn = wrap_pi(end->yaw_rel_rad - f.yaw_rel_rad);
     const Real est = std::atan2(chord.y(), chord.x()) - (f.yaw_rel_rad + Real(0.5) * turn);
     // Unwrap relative to the first chord's estimate before judging the spread.
