@@ -25,6 +25,7 @@ struct DriveScore {
   double rmse_h_m = 0.0;
   double max_h_m = 0.0;
   double inertial_share = 0.0;  // share of published outputs from the IMU filter
+  double inside_2sigma = 0.0;   // share of per-axis (x and y) errors inside the claimed 2 sigma, every published output
 };
 
 DriveScore run_family_drive(const char* cell, uint32_t seed) {
@@ -34,10 +35,12 @@ DriveScore run_family_drive(const char* cell, uint32_t seed) {
   DriveScore d;
   d.run = test::replay(so.rec, Params{});
   double sum2 = 0.0;
-  size_t n = 0, inertial = 0;
+  size_t n = 0, inertial = 0, inside = 0;
   for (const test::ScoredOutput& o : d.run.outputs) {
     if (!o.has_truth || !std::isfinite(o.out.pos_nav_m.x)) continue;
     const double e2 = o.err_nav_m[0] * o.err_nav_m[0] + o.err_nav_m[1] * o.err_nav_m[1];
+    inside += (std::fabs(o.err_nav_m[0]) <= 2.0 * static_cast<double>(o.out.pos_sigma_m.x)) +
+              (std::fabs(o.err_nav_m[1]) <= 2.0 * static_cast<double>(o.out.pos_sigma_m.y));
     sum2 += e2;
     d.max_h_m = std::max(d.max_h_m, std::sqrt(e2));
     ++n;
@@ -46,6 +49,7 @@ DriveScore run_family_drive(const char* cell, uint32_t seed) {
   EXPECT_GT(n, 1000U);
   d.rmse_h_m = n > 0 ? std::sqrt(sum2 / static_cast<double>(n)) : 1e9;
   d.inertial_share = n > 0 ? static_cast<double>(inertial) / static_cast<double>(n) : 0.0;
+  d.inside_2sigma = n > 0 ? static_cast<double>(inside) / static_cast<double>(2 * n) : 0.0;
   return d;
 }
 
@@ -116,13 +120,16 @@ TEST(NavigatorAlignment, AMulticopterHandsOverTheLevellingsGyroBiasWithTheUncert
   // WHEN the navigator runs over it
   const DriveScore s = run_family_drive("outage", 45);
   std::printf("outage:45: rmse_h %.3f m, max %.2f m, in 2-sigma %.1f %%, re-aligns %u, resets %u, IMU filter %.1f %%\n",
-              s.rmse_h_m, s.max_h_m, 100.0 * s.run.inside_2sigma, s.run.diag.reinits, s.run.diag.resets,
+              s.rmse_h_m, s.max_h_m, 100.0 * s.inside_2sigma, s.run.diag.reinits, s.run.diag.resets,
               100.0 * s.inertial_share);
   // THEN the bias's move is handed over as its uncertainty: the ranges correct
-  // it before the outage, and what remains is in the claimed sigma
+  // it before the outage, and what remains is in the claimed sigma (which
+  // filter publishes when depends on the platform's rounding: measured on
+  // x86-64 the IMU filter takes over, under qemu-aarch64 it does not; both
+  // must stay honest)
   EXPECT_TRUE(s.run.all_finite);
   EXPECT_EQ(s.run.diag.resets, 0U);
-  EXPECT_GT(s.run.inside_2sigma, 0.9);
+  EXPECT_GT(s.inside_2sigma, 0.9);
   EXPECT_LT(s.rmse_h_m, 4.0);
   EXPECT_LT(s.max_h_m, 40.0);
 }
