@@ -309,7 +309,8 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
   // a running but untrusted filter (large covariance) rejects at twice the gate.
   const bool gross = (std::isfinite(e.z) && e.z > innov_gate_sigma_) || (ctx.filter_ready && !std::isfinite(e.z)) ||
                      (!ctx.filter_ready && ctx.innovation_var_m2 > 0.0F &&
-                      std::fabs(ctx.innovation_m) > 2.0F * innov_gate_sigma_ * std::sqrt(ctx.innovation_var_m2));
+                      (ctx.innovation_m > innov_gate_sigma_ * std::sqrt(ctx.innovation_var_m2) ||
+                       std::fabs(ctx.innovation_m) > 2.0F * innov_gate_sigma_ * std::sqrt(ctx.innovation_var_m2)));
   // NLOS episodes last (docs/nlos.md "Episodes"): a two-state Markov chain per
   // pair with mean episode and line-of-sight lengths predicts the pair's NLOS
   // probability from its previous posterior, p- = p e^(-dt/T_nlos) + (1 - p)(1 - e^(-dt/T_los)),

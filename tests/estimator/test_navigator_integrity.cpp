@@ -149,11 +149,16 @@ TEST(NavigatorIntegrity, OneAnchorRangingShortAgainAndAgainIsCaughtWhileAnotherA
   std::printf("ground_blocked:91: rmse_h %.3f m, max %.2f m, short-range fails %u, inflations %u, re-aligns %u, resets %u\n",
               s.rmse_h_m, s.max_h_m, s.diag.short_range_fails, s.diag.inflations, s.diag.reinits, s.diag.resets);
   // THEN five short ranges in a row from that one anchor fail the short-range
-  // test whatever the other anchor says: the position is inflated and the
-  // ranges bring it back, with no re-alignment
+  // test whatever the other anchor says, and the recovery ladder brings the
+  // filter back. Since long ranges of a filter that is not ready are gated at
+  // the gate on S, the ranges-only filter of this pull-away with two anchors
+  // hands over 11 m off instead of 5 m (a lagging filter's correct long ranges
+  // are rejected too): inflation and re-anchoring leave the heading error, and
+  // the third failure within the recovery memory re-aligns once. More than one would be the old
+  // 12 s drift of a filter that nothing catches.
   EXPECT_TRUE(s.all_finite);
   EXPECT_GE(s.diag.short_range_fails, 1U);
-  EXPECT_EQ(s.diag.reinits, 0U);
+  EXPECT_LE(s.diag.reinits, 1U);
   EXPECT_EQ(s.diag.resets, 0U);
   EXPECT_LT(s.rmse_h_m, 1.0);
 }

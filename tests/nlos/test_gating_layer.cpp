@@ -339,13 +339,20 @@ TEST(GatingLayer, SvmRunsOnlyForPoliciesThatUseIt) {
   }
 }
 
-TEST(GatingLayer, DefaultRejectsGrossOutlierOfUntrustedFilter) {
-  // Constant-velocity mode without IMU: the Navigator predicts but does not call the
-  // filter ready. Only gross outliers (beyond twice the gate) are rejected then.
+TEST(GatingLayer, DefaultUntrustedFilterRejectsLongRangesAtTheGateAndShortOnesAtTwiceIt) {
+  // Constant-velocity mode: the Navigator predicts but does not call the filter
+  // ready, so the coarse models decide. Its innovation variance S still carries
+  // the large covariance: NLOS only lengthens a range, so a range longer than the
+  // gate (5 sigma) allows is rejected, while a short one is the filter's own
+  // error and is kept up to twice the gate (measured on tuning drive
+  // ground_blocked:2: a +7 sigma NLOS range moved the position 14 m).
   GatingLayer g;
   ASSERT_TRUE(ok(g.configure(make_site(), params_with(GatingPolicy::kDefault))));
-  EXPECT_FALSE(g.assess(ctx_at(0, 0, 40.0F, 20.0F, false)).use);  // 141 sigma
-  EXPECT_TRUE(g.assess(ctx_at(1, 20000, 21.0F, 1.0F, false)).use);  // 7 sigma: kept
+  EXPECT_FALSE(g.assess(ctx_at(0, 0, 40.0F, 20.0F, false)).use);     // +141 sigma
+  EXPECT_FALSE(g.assess(ctx_at(1, 20000, 21.0F, 1.0F, false)).use);  // +7 sigma long
+  EXPECT_TRUE(g.assess(ctx_at(2, 40000, 19.0F, -1.0F, false)).use);  // -7 sigma short: kept
+  EXPECT_TRUE(g.assess(ctx_at(3, 60000, 20.6F, 0.6F, false)).use);   // +4.2 sigma: inside the gate
+  EXPECT_FALSE(g.assess(ctx_at(0, 80000, 18.0F, -2.0F, false)).use); // -14 sigma: gross
 }
 
 TEST(GatingLayer, UsedCountersFollowOnResult) {
