@@ -905,6 +905,13 @@ void Navigator::cover_gap(uint64_t t_us, Real gap_m2) {
   ekf_.inflate_to(ErrIdx::kVel, 2, gap_m2 * Real(0.25));
 }
 
+void Navigator::clear_short_range_test() {
+  short_count_ = 0;
+  short_anchor_mask_ = 0;
+  short_gap_m2_ = Real(0);
+  for (auto& r : short_run_) r = 0;
+}
+
 void Navigator::short_range_test(uint64_t t_us, int anchor_index, Real innovation_m, Real innovation_var_m2) {
   // NLOS only lengthens a range (docs/ekf.md "Short-range test"): a range
   // shorter than predicted by more than kShortSigma standard deviations has a
@@ -941,10 +948,7 @@ void Navigator::short_range_test(uint64_t t_us, int anchor_index, Real innovatio
   if (!anchor_run && (short_count_ < kShortMinRanges || !two_anchors)) return;
   ++diag_.short_range_fails;
   const Real gap = std::fmax(short_gap_m2_, run_gap_m2);
-  short_count_ = 0;
-  short_anchor_mask_ = 0;
-  short_gap_m2_ = Real(0);
-  for (auto& r : short_run_) r = 0;
+  clear_short_range_test();
   cover_gap(t_us, gap);
 }
 
@@ -963,10 +967,7 @@ void Navigator::recover(uint64_t t_us, uint8_t min_level) {
 #endif
   monitor_head_ = 0;
   monitor_count_ = 0;
-  short_count_ = 0;
-  short_anchor_mask_ = 0;
-  short_gap_m2_ = Real(0);
-  for (auto& r : short_run_) r = 0;
+  clear_short_range_test();
   const Real anchor_var = anchor_bias_prior_var();
   if (level == 1) {
     // 1. Inflate: the covariance was too small for what the ranges say.

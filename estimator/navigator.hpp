@@ -234,6 +234,7 @@ class Navigator {
   void recover(uint64_t t_us, uint8_t min_level = 1);
   void integrity_check(uint64_t t_us, int tag_index);
   void short_range_test(uint64_t t_us, int anchor_index, Real innovation_m, Real innovation_var_m2);
+  void clear_short_range_test();  // forgets every run and count (recovery, restart)
   void cover_gap(uint64_t t_us, Real gap_m2);
   Vec3 lever(int tag_index) const;
   Vec3 model_lever(int tag_index) const;

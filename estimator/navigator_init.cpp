@@ -89,10 +89,7 @@ void Navigator::restart(bool counted_reset) {
   track_count_ = 0;
   monitor_head_ = 0;
   monitor_count_ = 0;
-  short_count_ = 0;
-  short_anchor_mask_ = 0;
-  short_gap_m2_ = Real(0);
-  for (auto& r : short_run_) r = 0;
+  clear_short_range_test();
   first_imu_t_us_ = 0;
   heading_wait_since_us_ = 0;
   last_constraint_us_ = 0;
