@@ -730,8 +730,9 @@ RangeReport Navigator::on_range(const UwbRange& range) {
     // the gate removes long (NLOS-like) ranges only, so learning from every
     // fused range would see the short side of the noise and drift negative.
     const bool central = std::fabs(innov) < kLearnOffsetMaxZ * std::sqrt(s_nom);
-    const bool learn_offsets = nominal && moving && central && !escape;
-    used = ekf_.update_prepared(innov, r_nom * scale, !learn_offsets).applied;
+    const bool learn_offsets = nominal && moving && central && !escape && !d.bound;
+    const Real r_add = std::isfinite(d.r_add_m2) && d.r_add_m2 > 0.0F ? static_cast<Real>(d.r_add_m2) : Real(0);
+    used = ekf_.update_prepared(innov, r_nom * scale + r_add, !learn_offsets).applied;
   }
   gating_.on_result(ctx, d, used);
 
@@ -769,7 +770,7 @@ RangeReport Navigator::on_range(const UwbRange& range) {
   if (pred.valid) {
     prev_tag_pos_[ai][ti] = pred.tag_pos_nav_m;
     prev_tag_valid_[ai][ti] = true;
-    learn_noise(ai, ti, range.t_us, innov, hph, used && !escape);
+    learn_noise(ai, ti, range.t_us, innov, hph, used && !escape && !d.bound);
     monitor_divergence(range.t_us, innov * innov / s_nom);
     if (phase_ == Phase::kRunning) short_range_test(range.t_us, ai, innov, s_nom);
   }

@@ -341,9 +341,28 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
   slot.has_p_nlos = true;
   slot.nlos_state = d.nlos;
   d.p_fused = posterior;
-  d.use = !d.nlos;
-  // Seed 003 inflation for accepted ranges with a large normalised residual.
-  if (d.use) {
+  // Short ranges are bounds (docs/nlos.md): NLOS only lengthens a range, so
+  // whatever its class the true distance is at most the range, and a range
+  // shorter than predicted (inside the gate) says the filter's distance is too
+  // long under either class. While the filter's own range uncertainty
+  // (S - R) exceeds the NLOS excess scale nlos_bias_m, a short range classified
+  // NLOS is fused as that bound: at the range, without the line-of-sight
+  // weight, its variance widened by the spread the NLOS excess would add
+  // (exponential law with mean mu = nlos_bias_m: p (2 - p) mu^2 for NLOS
+  // probability p). It never pulls the filter past the range. A converged filter
+  // does not take bounds: picking the short side of the noise of its
+  // NLOS-classified ranges would bias it toward those anchors.
+  const bool short_in_gate = std::isfinite(ctx.innovation_m) && ctx.innovation_var_m2 > 0.0F &&
+                             ctx.innovation_m < 0.0F &&
+                             ctx.innovation_m > -innov_gate_sigma_ * std::sqrt(ctx.innovation_var_m2);
+  const bool uncertain = ctx.innovation_var_m2 - ctx.meas_var_m2 > nlos_bias_m_ * nlos_bias_m_;
+  d.bound = d.nlos && !gross && short_in_gate && uncertain;
+  d.use = !d.nlos || d.bound;
+  if (d.bound) {
+    const float p = std::fmin(std::fmax(posterior, 0.0F), 1.0F);
+    d.r_add_m2 = p * (2.0F - p) * nlos_bias_m_ * nlos_bias_m_;
+  } else if (d.use) {
+    // Seed 003 inflation for accepted ranges with a large normalised residual.
     const float factor = residual_inflation_factor(e.z, resid_th_, resid_beta_);
     d.r_scale = std::fmax(std::isfinite(factor) ? factor : 1.0F, los_weight_scale);
   }
@@ -387,6 +406,8 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
       const bool in_gate = z <= innov_gate_sigma_;
       const bool admit_all = starved || los_share_ < drift_frac_;
       d.use = std::isfinite(ctx.innovation_m) && !channel_nlos && (in_gate || admit_all);
+      d.bound = false;
+      d.r_add_m2 = 0.0F;
       if (d.use) {
         const float factor = residual_inflation_factor(z, resid_th_, resid_beta_);
         d.r_scale = std::isfinite(factor) ? std::fmax(factor, escape_r_scale_) : escape_r_scale_;

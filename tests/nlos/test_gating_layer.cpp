@@ -355,6 +355,43 @@ TEST(GatingLayer, DefaultUntrustedFilterRejectsLongRangesAtTheGateAndShortOnesAt
   EXPECT_FALSE(g.assess(ctx_at(0, 80000, 18.0F, -2.0F, false)).use); // -14 sigma: gross
 }
 
+TEST(GatingLayer, DefaultFusesAShortNlosRangeOfAnUncertainFilterAsABound) {
+  // A range classified NLOS (channel evidence) that is shorter than predicted:
+  // NLOS only lengthens, so the true distance is at most the range. An uncertain
+  // filter (predicted-range variance above nlos_bias_m^2) fuses it as that bound
+  // with the NLOS excess spread added to R; a long one, a converged filter's and
+  // one beyond the gate stay out.
+  GatingLayer g;
+  Params p = params_with(GatingPolicy::kDefault);
+  ASSERT_TRUE(ok(p.set(ParamId::kGateEscapeS, 0.0F)));  // robust mode off: gating only
+  ASSERT_TRUE(ok(g.configure(make_site(), p)));
+  const float mu = p[ParamId::kGateNlosBias];
+  auto nlos_ctx = [](int a, uint64_t t_us, float innovation_m, float innovation_var_m2) {
+    RangeContext c = ctx_at(a, t_us, 20.0F + innovation_m, innovation_m, false);
+    c.innovation_var_m2 = innovation_var_m2;
+    c.range.fp_power_dbm = -95.0F;
+    c.range.rx_power_dbm = -80.0F;  // 15 dB gap: classic NLOS signature
+    return c;
+  };
+  const GatingDecision bound = g.assess(nlos_ctx(0, 0, -1.0F, 1.0F));  // S - R = 0.99 m^2 > mu^2
+  EXPECT_TRUE(bound.nlos);
+  EXPECT_TRUE(bound.use);
+  EXPECT_TRUE(bound.bound);
+  EXPECT_FLOAT_EQ(bound.r_scale, 1.0F);
+  const float q = bound.p_fused;
+  EXPECT_NEAR(bound.r_add_m2, q * (2.0F - q) * mu * mu, 1e-6F);
+  EXPECT_GT(bound.r_add_m2, 0.5F * mu * mu);
+  const GatingDecision long_range = g.assess(nlos_ctx(1, 0, +1.0F, 1.0F));
+  EXPECT_FALSE(long_range.use);
+  EXPECT_FALSE(long_range.bound);
+  const GatingDecision converged = g.assess(nlos_ctx(2, 0, -0.1F, 0.02F));  // S - R = 0.01 m^2 < mu^2
+  EXPECT_FALSE(converged.use);
+  EXPECT_FALSE(converged.bound);
+  const GatingDecision beyond = g.assess(nlos_ctx(3, 0, -6.0F, 1.0F));  // -6 sigma: past the gate
+  EXPECT_FALSE(beyond.use);
+  EXPECT_FALSE(beyond.bound);
+}
+
 TEST(GatingLayer, UsedCountersFollowOnResult) {
   GatingLayer g;
   ASSERT_TRUE(ok(g.configure(make_site(), params_with(GatingPolicy::kNone))));
