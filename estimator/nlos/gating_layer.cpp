@@ -306,7 +306,9 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
   const float r = ds_combine_all(evidence, 4);
   d.p_svm = p_coarse;  // the SVM that ran (SVM2, else SVM1); NaN when the coarse models were not used
   // A gross outlier against the filter is rejected whatever the other evidence says;
-  // a running but untrusted filter (large covariance) rejects at twice the gate.
+  // a running but untrusted filter (large covariance) rejects long ranges at the
+  // gate (NLOS only lengthens) and short ones, which say the filter is off, at
+  // twice the gate.
   const bool gross = (std::isfinite(e.z) && e.z > innov_gate_sigma_) || (ctx.filter_ready && !std::isfinite(e.z)) ||
                      (!ctx.filter_ready && ctx.innovation_var_m2 > 0.0F &&
                       (ctx.innovation_m > innov_gate_sigma_ * std::sqrt(ctx.innovation_var_m2) ||
