@@ -3,10 +3,16 @@
 // here by typing the session's commands into the firmware on a lockstep replay
 // of the simulated parking_nlos drive, and compared with the document.
 // Regenerate after a change: UWBNAV_UPDATE_DOCS=1 ctest --preset host -R ConsoleDocs
+// Decimal numbers may differ by one unit in their last printed digit: x86-64
+// and aarch64 round the float estimator's results differently there (measured:
+// a covariance printed 1.4e-07 on one and 1.41e-07 on the other). Text,
+// integers and every other digit must match.
 #include <gtest/gtest.h>
 
 #include <cctype>
+#include <cmath>
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -110,6 +116,81 @@ const std::vector<Session>& sessions() {
   return all;
 }
 
+// End of the decimal number starting at k (k if none starts there): an
+// optional sign, digits, an optional fraction and exponent. Digits inside a
+// word (m2ps4, 0xca42f610) do not start a number.
+size_t number_end(const std::string& s, size_t k) {
+  if (k > 0 && (std::isalnum(static_cast<unsigned char>(s[k - 1])) != 0 || s[k - 1] == '_' || s[k - 1] == '.')) return k;
+  size_t i = k;
+  if (i < s.size() && s[i] == '-') ++i;
+  const size_t digits = i;
+  while (i < s.size() && std::isdigit(static_cast<unsigned char>(s[i])) != 0) ++i;
+  if (i == digits) return k;
+  if (i + 1 < s.size() && s[i] == '.' && std::isdigit(static_cast<unsigned char>(s[i + 1])) != 0) {
+    ++i;
+    while (i < s.size() && std::isdigit(static_cast<unsigned char>(s[i])) != 0) ++i;
+  }
+  if (i + 1 < s.size() && (s[i] == 'e' || s[i] == 'E')) {
+    size_t j = i + 1;
+    if (j < s.size() && (s[j] == '-' || s[j] == '+')) ++j;
+    if (j < s.size() && std::isdigit(static_cast<unsigned char>(s[j])) != 0) {
+      while (j < s.size() && std::isdigit(static_cast<unsigned char>(s[j])) != 0) ++j;
+      i = j;
+    }
+  }
+  return i;
+}
+
+// One unit in the last printed digit of a decimal token ("1.41e-07" -> 1e-09).
+double last_digit_unit(const std::string& tok) {
+  const size_t e = tok.find_first_of("eE");
+  const std::string mantissa = tok.substr(0, e);
+  const size_t dot = mantissa.find('.');
+  const int decimals = dot == std::string::npos ? 0 : static_cast<int>(mantissa.size() - dot - 1);
+  const int exponent = e == std::string::npos ? 0 : std::atoi(tok.c_str() + e + 1);
+  return std::pow(10.0, exponent - decimals);
+}
+
+// True when the texts are equal but for decimal numbers (with a fraction or an
+// exponent) that differ by at most one unit in the last printed digit.
+bool same_to_the_last_digit(const std::string& a, const std::string& b) {
+  size_t i = 0;
+  size_t j = 0;
+  while (i < a.size() && j < b.size()) {
+    const size_t ia = number_end(a, i);
+    const size_t jb = number_end(b, j);
+    if (ia > i && jb > j) {
+      const std::string ta = a.substr(i, ia - i);
+      const std::string tb = b.substr(j, jb - j);
+      if (ta != tb) {
+        const bool decimal = ta.find_first_of(".eE") != std::string::npos && tb.find_first_of(".eE") != std::string::npos;
+        if (!decimal) return false;
+        const double unit = std::max(last_digit_unit(ta), last_digit_unit(tb));
+        if (!(std::fabs(std::strtod(ta.c_str(), nullptr) - std::strtod(tb.c_str(), nullptr)) <= unit * 1.000001)) {
+          return false;
+        }
+      }
+      i = ia;
+      j = jb;
+      continue;
+    }
+    if (a[i] != b[j]) return false;
+    ++i;
+    ++j;
+  }
+  return i == a.size() && j == b.size();
+}
+
+TEST(ConsoleDocs, TheComparisonForgivesOnlyTheLastDigitOfDecimalNumbers) {
+  EXPECT_TRUE(same_to_the_last_digit("att_rad2=1.24e-07,1.4e-07 x_m=48.291", "att_rad2=1.24e-07,1.41e-07 x_m=48.292"));
+  EXPECT_FALSE(same_to_the_last_digit("x_m=48.291", "x_m=48.293"));       // two units
+  EXPECT_FALSE(same_to_the_last_digit("p=1.41e-07", "p=1.43e-07"));
+  EXPECT_FALSE(same_to_the_last_digit("used_total=1174", "used_total=1175"));  // integers are exact
+  EXPECT_FALSE(same_to_the_last_digit("mode=valid", "mode=degraded"));
+  EXPECT_FALSE(same_to_the_last_digit("ba_m2ps4=2.06e-05", "ba_m3ps4=2.06e-05"));  // digits in words are text
+  EXPECT_FALSE(same_to_the_last_digit("a=1.0", "a=1.0 "));
+}
+
 std::string read_text(const std::string& path) {
   std::ifstream f(path);
   std::stringstream ss;
@@ -137,8 +218,10 @@ TEST(ConsoleDocs, ExampleSessionsInConsoleMdAreTheOutputOfTheCode) {
     if (update) {
       doc.replace(b + open.size(), shown.size(), generated);
     } else {
-      EXPECT_EQ(shown, generated) << "docs/console.md session '" << s.name
-                                  << "' is stale: UWBNAV_UPDATE_DOCS=1 ctest --preset host -R ConsoleDocs";
+      EXPECT_TRUE(same_to_the_last_digit(shown, generated))
+          << "docs/console.md session '" << s.name
+          << "' is stale: UWBNAV_UPDATE_DOCS=1 ctest --preset host -R ConsoleDocs\nshown:\n"
+          << shown << "\ngenerated:\n" << generated;
     }
   }
   if (update) std::ofstream(path) << doc;
