@@ -287,6 +287,8 @@ GatingDecision GatingLayer::decide_raim(const RangeContext& ctx, int slot) const
 
 GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Evidence& e, Slot& slot) {
   GatingDecision d;
+  // sqrt(S) once per range: the gross rule, the bound and the escape all read it.
+  const float sqrt_s = ctx.innovation_var_m2 > 0.0F ? std::sqrt(ctx.innovation_var_m2) : kNaNf;
   const float p_innov =
       ctx.filter_ready ? innovation_p_nlos(ctx.innovation_m, ctx.innovation_var_m2, nlos_bias_m_) : kNaNf;
   // With a prediction the normalised innovation supersedes the coarse models of seed 000
@@ -311,8 +313,8 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
   // twice the gate.
   const bool gross = (std::isfinite(e.z) && e.z > innov_gate_sigma_) || (ctx.filter_ready && !std::isfinite(e.z)) ||
                      (!ctx.filter_ready && ctx.innovation_var_m2 > 0.0F &&
-                      (ctx.innovation_m > innov_gate_sigma_ * std::sqrt(ctx.innovation_var_m2) ||
-                       std::fabs(ctx.innovation_m) > 2.0F * innov_gate_sigma_ * std::sqrt(ctx.innovation_var_m2)));
+                      (ctx.innovation_m > innov_gate_sigma_ * sqrt_s ||
+                       std::fabs(ctx.innovation_m) > 2.0F * innov_gate_sigma_ * sqrt_s));
   // NLOS episodes last (docs/nlos.md "Episodes"): a two-state Markov chain per
   // pair with mean episode and line-of-sight lengths predicts the pair's NLOS
   // probability from its previous posterior, p- = p e^(-dt/T_nlos) + (1 - p)(1 - e^(-dt/T_los)),
@@ -356,7 +358,7 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
   // NLOS-classified ranges would bias it toward those anchors.
   const bool short_in_gate = std::isfinite(ctx.innovation_m) && ctx.innovation_var_m2 > 0.0F &&
                              ctx.innovation_m < 0.0F &&
-                             ctx.innovation_m > -innov_gate_sigma_ * std::sqrt(ctx.innovation_var_m2);
+                             ctx.innovation_m > -innov_gate_sigma_ * sqrt_s;
   const bool uncertain = ctx.innovation_var_m2 - ctx.meas_var_m2 > nlos_bias_m_ * nlos_bias_m_;
   d.bound = d.nlos && !gross && short_in_gate && uncertain;
   d.use = !d.nlos || d.bound;
@@ -382,7 +384,7 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
   // a pull-away at 2 m/s^2 under 47 % NLOS, no range fused for 15 s, 140 m off).
   // Its normalised innovation is honest (S carries the large covariance).
   const float z = std::isfinite(e.z) ? e.z
-                  : ctx.innovation_var_m2 > 0.0F ? std::fabs(ctx.innovation_m) / std::sqrt(ctx.innovation_var_m2)
+                  : ctx.innovation_var_m2 > 0.0F ? std::fabs(ctx.innovation_m) / sqrt_s
                                                  : kNaNf;
   if (escape_us_ > 0 && std::isfinite(z)) {
     constexpr float kShareGain = 0.02F;  // EMA over about 50 ranges
