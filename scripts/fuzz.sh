@@ -4,24 +4,30 @@
 # target on its committed seeds (tests/fuzz/corpus/<target>) plus a working
 # corpus in build/fuzz/corpus/<target>, prints executions and crashes per
 # target (docs/hardening.md) and fails when any target crashed.
-# Usage: scripts/fuzz.sh [--ci | --seconds N | --runs N] [TARGET...]
+# Usage: scripts/fuzz.sh [--ci | --seconds N | --runs N] [--jobs J] [TARGET...]
 #   --ci         25 s per target (CI budget: ~2 min for the five targets)
 #   --seconds N  N seconds per target (long runs on demand; default 300)
 #   --runs N     N executions per target, however long that takes (the issue's
 #                10 M offline runs); the "s" column then shows the wall time
+#   --jobs J     J fuzzer processes per target on the same working corpus
+#                (--runs N: N/J executions each; --seconds: J times the
+#                executions); the row sums their executions, shows the largest
+#                coverage and counts a crash in any of them
 # Crash inputs land in build/fuzz/artifacts/<target>-crash-*; replay one with
 #   build/fuzz/fuzz/<target> FILE
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=300
 runs=0
+jobs=1
 targets=()
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --ci) seconds=25 ;;
     --seconds) seconds="$2"; shift ;;
     --runs) runs="$2"; seconds=0; shift ;;
-    -h | --help) sed -n 2,14p "$0"; exit 0 ;;
+    --jobs) jobs="$2"; shift ;;
+    -h | --help) sed -n 2,18p "$0"; exit 0 ;;
     *) targets+=("$1") ;;
   esac
   shift
@@ -35,7 +41,13 @@ cmake --build --preset fuzz
 bin=build/fuzz/fuzz
 seeds=tests/fuzz/corpus
 mkdir -p build/fuzz/artifacts build/fuzz/tmp
-export TMPDIR="$PWD/build/fuzz/tmp"  # fuzz_recording writes its recording files here
+# fuzz_recording writes a recording per input: on a RAM file system (tmpfs
+# /dev/shm where there is one) it runs about 6x faster than on the disk.
+export TMPDIR="$PWD/build/fuzz/tmp"
+if [[ -d /dev/shm && -w /dev/shm ]] && shm_dir=$(mktemp -d /dev/shm/uwbnav_fuzz.XXXXXX 2>/dev/null); then
+  export TMPDIR="$shm_dir"
+  trap 'rm -rf "$shm_dir"' EXIT
+fi
 
 max_len() {
   case "$1" in
@@ -54,21 +66,30 @@ for t in "${targets[@]}"; do
   mkdir -p "$work"
   log="build/fuzz/$t.log"
   if [[ $runs -gt 0 ]]; then
-    budget=(-runs="$runs")
-    echo "fuzz: $t for $runs executions"
+    budget=(-runs="$(((runs + jobs - 1) / jobs))")
+    echo "fuzz: $t for $runs executions ($jobs process(es))"
   else
     budget=(-max_total_time="$seconds")
-    echo "fuzz: $t for ${seconds} s"
+    echo "fuzz: $t for ${seconds} s ($jobs process(es))"
   fi
-  rc=0
+  rm -f "build/fuzz/$t".[0-9]*.log
   start=$SECONDS
-  # One process; a crash, leak, sanitizer report or 10 s slow input stops it.
-  "$bin/$t" "${budget[@]}" -timeout=10 -rss_limit_mb=2048 -max_len="$(max_len "$t")" \
-    -print_final_stats=1 -artifact_prefix="build/fuzz/artifacts/$t-" "$work" "$seeds/$t" >"$log" 2>&1 || rc=$?
+  # One process per job; a crash, leak, sanitizer report or 10 s slow input stops it.
+  pids=()
+  for ((j = 0; j < jobs; ++j)); do
+    jlog="$log"
+    [[ $jobs -gt 1 ]] && jlog="build/fuzz/$t.$j.log"
+    "$bin/$t" "${budget[@]}" -timeout=10 -rss_limit_mb=2048 -max_len="$(max_len "$t")" \
+      -print_final_stats=1 -artifact_prefix="build/fuzz/artifacts/$t-" "$work" "$seeds/$t" >"$jlog" 2>&1 &
+    pids+=($!)
+  done
+  rc=0
+  for p in "${pids[@]}"; do wait "$p" || rc=$?; done
   took=$((SECONDS - start))
-  execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
-  rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)
-  cov=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | cut -d' ' -f2)
+  if [[ $jobs -gt 1 ]]; then cat "build/fuzz/$t".[0-9]*.log >"$log"; fi
+  execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | awk '{s += $1} END {if (NR) print s}')
+  rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | awk '{s += $1} END {if (NR) print s}')
+  cov=$(grep -o 'cov: [0-9]*' "$log" | cut -d' ' -f2 | sort -n | tail -1)
   crashes=0
   if [[ $rc -ne 0 ]]; then
     crashes=1
