@@ -27,7 +27,7 @@ while [[ $# -gt 0 ]]; do
     --seconds) seconds="$2"; shift ;;
     --runs) runs="$2"; seconds=0; shift ;;
     --jobs) jobs="$2"; shift ;;
-    -h | --help) sed -n 2,18p "$0"; exit 0 ;;
+    -h | --help) sed -n 2,17p "$0"; exit 0 ;;
     *) targets+=("$1") ;;
   esac
   shift
