@@ -209,6 +209,17 @@ void Navigator::update_params(const Params& params) {
   c.init_speed = static_cast<Real>(params[ParamId::kEkfInitSpeed]);
   c.init_yaw_sigma = static_cast<Real>(params[ParamId::kEkfInitYawSigma]);
   c.rbf_mode = static_cast<RbfMode>(std::lround(params[ParamId::kEkfRbfBridge]));
+#if UWBNAV_GNSS
+  c.gnss_enable = params[ParamId::kGnssEnable] > 0.5F;
+  c.gnss_min_rank = static_cast<int>(std::lround(params[ParamId::kGnssMinQuality]));
+  c.gnss_min_sv = static_cast<int>(std::lround(params[ParamId::kGnssMinSv]));
+  c.gnss_max_sigma = static_cast<Real>(params[ParamId::kGnssMaxSigma]);
+  c.gnss_sigma_scale = static_cast<Real>(params[ParamId::kGnssSigmaScale]);
+  c.gnss_corr_time = static_cast<Real>(params[ParamId::kGnssCorrTime]);
+  c.gnss_gate_sigma = static_cast<Real>(params[ParamId::kGnssGateSigma]);
+  c.gnss_max_latency_us = param_us(params[ParamId::kGnssMaxLatency] * 1e6F);
+  c.gnss_use_vel = params[ParamId::kGnssUseVel] > 0.5F;
+#endif
 #if UWBNAV_RBF_BRIDGE
   bridge_.configure(c.rbf_mode);
 #endif
@@ -615,6 +626,27 @@ void Navigator::learn_noise(int anchor_index, int tag_index, uint64_t t_us, Real
   diag_.uwb_sigma_m = static_cast<float>(std::sqrt(r_los_m2_));
 }
 
+bool Navigator::advance_cv(uint64_t t_us) {
+  if (!cv_mode_ || t_us <= t_state_us_) return true;
+  const CvModel m = cv_model(t_us);
+  const Real dt_cv = seconds(diff_us(t_us, t_state_us_));
+  ekf_.predict_cv(dt_cv, m.accel_psd, cfg_.cv_yaw_psd, m.vel_tau_s, m.turn_psd);
+  if (m.level_sigma_rad > Real(0)) ekf_.predict_level(dt_cv, m.level_sigma_rad, kLevelTau_s);
+  t_state_us_ = t_us;
+  check_health();
+  if (phase_ != Phase::kRunning) return false;
+  apply_constraints(t_us);
+  // Ground vehicles point where they go: a well-determined velocity gives the
+  // heading of the ranges-only filter (from then on the NHC keeps it).
+  const Vec3& v = ekf_.state().vel_nav_mps;
+  const Real speed = v.head<2>().norm();
+  const Real vel_sigma = std::sqrt(ekf_.cov()(ErrIdx::kVel, ErrIdx::kVel) + ekf_.cov()(ErrIdx::kVel + 1, ErrIdx::kVel + 1));
+  if (!cv_yaw_known_ && cfg_.ground_constraints && speed > kCvHeadingMinSpeed_mps && vel_sigma < Real(0.25) * speed) {
+    cv_set_yaw(std::atan2(v.y(), v.x()), std::atan2(vel_sigma, speed) + kCvHeadingSlip_rad);
+  }
+  return true;
+}
+
 RangeReport Navigator::on_range(const UwbRange& range) {
   RangeReport rep;
   rep.t_us = range.t_us;
@@ -649,24 +681,7 @@ RangeReport Navigator::on_range(const UwbRange& range) {
   }
 
   if (!cv_mode_ && !imu_alive(range.t_us)) enter_cv_mode(NavMode::kUwbOnly);
-  if (cv_mode_ && range.t_us > t_state_us_) {
-    const CvModel m = cv_model(range.t_us);
-    const Real dt_cv = seconds(diff_us(range.t_us, t_state_us_));
-    ekf_.predict_cv(dt_cv, m.accel_psd, cfg_.cv_yaw_psd, m.vel_tau_s, m.turn_psd);
-    if (m.level_sigma_rad > Real(0)) ekf_.predict_level(dt_cv, m.level_sigma_rad, kLevelTau_s);
-    t_state_us_ = range.t_us;
-    check_health();
-    if (phase_ != Phase::kRunning) return rep;
-    apply_constraints(range.t_us);
-    // Ground vehicles point where they go: a well-determined velocity gives the
-    // heading of the ranges-only filter (from then on the NHC keeps it).
-    const Vec3& v = ekf_.state().vel_nav_mps;
-    const Real speed = v.head<2>().norm();
-    const Real vel_sigma = std::sqrt(ekf_.cov()(ErrIdx::kVel, ErrIdx::kVel) + ekf_.cov()(ErrIdx::kVel + 1, ErrIdx::kVel + 1));
-    if (!cv_yaw_known_ && cfg_.ground_constraints && speed > kCvHeadingMinSpeed_mps && vel_sigma < Real(0.25) * speed) {
-      cv_set_yaw(std::atan2(v.y(), v.x()), std::atan2(vel_sigma, speed) + kCvHeadingSlip_rad);
-    }
-  }
+  if (!advance_cv(range.t_us)) return rep;
 
   const int slot = lend_bias_slot(ai, range.t_us);
   RangeErrorSlots es;
@@ -1124,8 +1139,12 @@ NavOutput Navigator::output(uint64_t t_us) {
     out.mode = NavMode::kInertial;
   }
 
-  const uint64_t last_uwb_us =
+  uint64_t last_uwb_us =
       diag_.last_range_used_t_us > running_since_us_ ? diag_.last_range_used_t_us : running_since_us_;
+#if UWBNAV_GNSS
+  // A fused GNSS fix aids the filter as a range does: no outage while fixes come.
+  if (diag_.last_gnss_used_t_us > last_uwb_us) last_uwb_us = diag_.last_gnss_used_t_us;
+#endif
   const bool uwb_outage = diff_us(t_us, last_uwb_us) > static_cast<int64_t>(cfg_.uwb_timeout_us);
   const Real sigma_h = std::sqrt(var_p[0] + var_p[1]);
   // Nominal: the IMU filter, or the ranges-only filter on a vehicle without IMU.

@@ -43,6 +43,12 @@ struct NavDiagnostics {
   uint64_t last_range_used_t_us = 0;
   float uwb_sigma_m = 0.0F;      // learned LOS ranging 1-sigma [m]
   RbfBridgeDiag rbf;             // outage bridging (ekf.rbf_bridge): training, predictions, fusions
+#if UWBNAV_GNSS
+  uint32_t gnss_received = 0;    // fixes handed to on_gnss
+  uint32_t gnss_used = 0;        // fixes fused
+  uint32_t gnss_rejected[static_cast<size_t>(GnssVerdict::kCount)] = {};  // per GnssVerdict (kFused unused)
+  uint64_t last_gnss_used_t_us = 0;  // time of validity of the last fused fix [us]
+#endif
 };
 
 // The range-error state of one anchor, for the console and diagnostics.
@@ -79,6 +85,9 @@ class Navigator {
   [[nodiscard]] Status on_imu(const ImuSample& imu);
   // One validated range: gating + sequential scalar update at range.t_us.
   [[nodiscard]] RangeReport on_range(const UwbRange& range);
+  // One validated GNSS fix (docs/ekf.md "GNSS"): loose position (and velocity)
+  // update of the running filter at the fix's time of validity, lever arm applied.
+  [[nodiscard]] GnssReport on_gnss(const GnssFix& fix);
   // The solution at t_us (end of a 10 ms cycle). Resets per-cycle counters.
   [[nodiscard]] NavOutput output(uint64_t t_us);
 
@@ -147,6 +156,17 @@ class Navigator {
     Real init_speed = Real(1);
     Real init_yaw_sigma = Real(0.12);
     RbfMode rbf_mode = RbfMode::kOff;
+#if UWBNAV_GNSS
+    bool gnss_enable = true;
+    int gnss_min_rank = 1;           // lowest fix rank fused (gnss_rank())
+    int gnss_min_sv = 5;
+    Real gnss_max_sigma = Real(10);  // [m] horizontal
+    Real gnss_sigma_scale = Real(1.5);
+    Real gnss_corr_time = Real(20);  // [s]
+    Real gnss_gate_sigma = Real(5);
+    uint64_t gnss_max_latency_us = 500000;
+    bool gnss_use_vel = true;
+#endif
   };
 
   // Latest range per anchor/tag pair (LS fixes).
@@ -229,6 +249,9 @@ class Navigator {
   void bridge_outage(uint64_t t_us, const Vec3& accel_mean_body_mps2, const Vec3& gyro_mean_body_radps, Real dt_s);
   void apply_constraints(uint64_t t_us);
   bool fuse(const ScalarObs& obs);
+  // Ranges-only filter: predicts to t_us (later than the state), constraints,
+  // heading from the velocity. False when the filter restarted on the way.
+  bool advance_cv(uint64_t t_us);
   void check_health(bool after_predict = true);
   void monitor_divergence(uint64_t t_us, Real nis);
   void recover(uint64_t t_us, uint8_t min_level = 1);
@@ -360,6 +383,10 @@ class Navigator {
   RbfBridge bridge_;
   uint64_t bridge_last_us_ = 0;   // last pseudo-measurement [us]
   uint32_t bridge_count_ = 0;     // pseudo-measurements in the current outage
+#endif
+
+#if UWBNAV_GNSS
+  uint64_t gnss_prev_fused_us_ = 0;  // time of validity of the previous fused fix [us] (correlation)
 #endif
 
   uint16_t cycle_used_ = 0;

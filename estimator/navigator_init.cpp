@@ -65,6 +65,9 @@ void Navigator::restart(bool counted_reset) {
     after_failure_ = true;
   }
   phase_ = Phase::kWaitFix;
+#if UWBNAV_GNSS
+  gnss_prev_fused_us_ = 0;
+#endif
   cv_mode_ = false;
   cv_yaw_known_ = false;
   height_on_ = false;

@@ -17,6 +17,12 @@ namespace uwbnav {
 #define UWBNAV_RBF_BRIDGE_DEFAULT 0.0F
 #endif
 
+// GNSS fusion (estimator/mm_gnss.cpp). Boards without a receiver and short of
+// flash build without it (hal/mps2: UWBNAV_GNSS=0; its parameters are then absent).
+#ifndef UWBNAV_GNSS
+#define UWBNAV_GNSS 1
+#endif
+
 enum class ParamId : uint16_t {
 #define X(e, id, name, unit, kind, def, lo, hi, doc) e,
 #include "estimator/params_table.inc"

@@ -43,6 +43,29 @@ struct UwbRange {
   float rx_power_dbm = kNaNf;   // total received power [dBm], NaN when unknown
 };
 
+// Fix quality of a GNSS receiver, as the NMEA GGA quality indicator.
+enum class GnssFixType : uint8_t {
+  kNone = 0,      // no fix: the row carries no position
+  kSingle = 1,    // autonomous (SPS) fix, metres
+  kDgnss = 2,     // code-differential (DGNSS / SBAS), decimetres to a metre
+  kRtkFixed = 4,  // carrier phase, integer ambiguities fixed, centimetres
+  kRtkFloat = 5,  // carrier phase, float ambiguities, decimetres
+};
+
+// One GNSS position-velocity fix of the receiver's antenna (docs/dataset-format.md
+// "gnss.csv"). Position and velocity are in the navigation frame: the receiver
+// driver converts the geodetic solution with the site's survey datum.
+struct GnssFix {
+  uint64_t t_us = 0;            // time of validity of the solution, sensor clock [us]
+  uint64_t rx_t_us = 0;         // arrival at the ECU [us], >= t_us (latency = rx_t_us - t_us)
+  Vec3f pos_nav_m;              // antenna position, navigation frame [m]
+  Vec3f pos_sigma_m;            // receiver's claimed 1-sigma per axis [m]
+  Vec3f vel_nav_mps{kNaNf, kNaNf, kNaNf};  // antenna velocity, navigation frame [m/s]; NaN when not reported
+  float vel_sigma_mps = kNaNf;  // receiver's claimed 1-sigma per velocity axis [m/s]; NaN when not reported
+  GnssFixType fix = GnssFixType::kSingle;
+  uint8_t num_sv = 0;           // satellites used, 0 = unknown
+};
+
 // Boards with little RAM may build with fewer tags (UWBNAV_MAX_TAGS, e.g.
 // hal/mps2); per anchor/tag pair state scales with kMaxAnchors * kMaxTags.
 #ifndef UWBNAV_MAX_TAGS
@@ -85,6 +108,8 @@ struct SiteConfig {
   // site is uncalibrated (offsets all zero, the filter's own bias prior applies).
   float range_offset_m[kMaxAnchors][kMaxTags] = {};
   float range_offset_sigma_m = kNaNf;
+  // GNSS antenna position in the body frame (FLU) [m]; meta.ini `gnss_lever_m`.
+  Vec3f gnss_lever_body_m;
 
   // Returns index into anchors[] or -1 when unknown.
   int find_anchor(uint16_t id) const {
@@ -185,6 +210,38 @@ struct RangeReport {
   float p_fused = kNaNf;         // fused NLOS probability R (eq. 8) or the policy's evidence
   bool nlos = false;             // the gating layer's NLOS decision
   bool used = false;             // fused into the filter
+};
+
+// What the estimator did with one GNSS fix (docs/ekf.md "GNSS"). Stable order (console).
+enum class GnssVerdict : uint8_t {
+  kFused = 0,      // position (and velocity, when reported) fused
+  kDisabled,       // gnss.enable = 0, or the board build has no GNSS fusion
+  kNoFilter,       // no filter running yet: GNSS does not start one (the ranges do)
+  kQuality,        // degraded fix: quality, satellites or claimed sigma (gnss.min_quality, min_sv, max_sigma)
+  kLate,           // latency above gnss.max_latency
+  kGate,           // innovation outside gnss.gate_sigma on some axis
+  kCount
+};
+
+constexpr const char* gnss_verdict_name(GnssVerdict v) {
+  switch (v) {
+    case GnssVerdict::kFused: return "fused";
+    case GnssVerdict::kDisabled: return "disabled";
+    case GnssVerdict::kNoFilter: return "no_filter";
+    case GnssVerdict::kQuality: return "quality";
+    case GnssVerdict::kLate: return "late";
+    case GnssVerdict::kGate: return "gate";
+    case GnssVerdict::kCount: break;
+  }
+  return "unknown";
+}
+
+struct GnssReport {
+  uint64_t t_us = 0;             // the fix's time of validity [us]
+  GnssVerdict verdict = GnssVerdict::kDisabled;
+  Vec3f innovation_m{kNaNf, kNaNf, kNaNf};  // antenna position, measured minus predicted, nav frame [m]
+  float nis_max = kNaNf;         // largest innov^2 / S over the position axes [-]
+  bool vel_used = false;         // the velocity was fused too
 };
 
 }  // namespace uwbnav

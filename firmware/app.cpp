@@ -243,11 +243,40 @@ void App::process_in_time_order() {
   }
 }
 
+// GNSS fixes arrive late (their latency) and at a few hertz: each is checked
+// and fused after the cycle's IMU and ranges, at its own time of validity.
+void App::drain_gnss(uint64_t now_us) {
+#if UWBNAV_GNSS
+  if (board_.gnss == nullptr) return;
+  GnssFix fix;
+  for (size_t n = 0; n < kMaxGnssPerCycle; ++n) {
+    const Status s = board_.gnss->poll(now_us, fix);
+    if (s == Status::kIoError) {
+      ++stats_.gnss.io_errors;
+      break;
+    }
+    if (!ok(s)) break;
+    ++stats_.gnss.received;
+    const Verdict v = validator_.check_gnss(fix, now_us);
+    if (!v.accepted) {
+      ++stats_.gnss.rejected[static_cast<size_t>(v.reason)];
+      continue;
+    }
+    ++stats_.gnss.accepted;
+    const GnssReport rep = nav_.on_gnss(fix);
+    if (observer_ != nullptr) observer_->on_gnss(rep);
+  }
+#else
+  static_cast<void>(now_us);
+#endif
+}
+
 void App::tick(uint64_t now_us) {
   last_tick_us_ = now_us;
   if (initialised_) {
     drain_sensors(now_us);
     process_in_time_order();
+    drain_gnss(now_us);
     last_output_ = nav_.output(now_us);
     if (observer_ != nullptr) observer_->on_output(last_output_);
     can_diag_.set_from_stats(stats_);

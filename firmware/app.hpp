@@ -31,6 +31,7 @@ constexpr size_t kMaxImuPerCycle = UWBNAV_MAX_IMU_PER_CYCLE;
 constexpr size_t kMaxUwbPerCycle = UWBNAV_MAX_UWB_PER_CYCLE;
 static_assert(kMaxImuPerCycle >= 1 && kMaxUwbPerCycle >= 1, "a cycle must accept at least one frame of each");
 constexpr size_t kMaxCanRxPerCycle = 64;    // HIL input frames read per cycle
+constexpr size_t kMaxGnssPerCycle = 4;      // GNSS fixes drained per cycle (receivers send 1-20 Hz)
 #ifndef UWBNAV_MAX_CAN_PENDING
 #define UWBNAV_MAX_CAN_PENDING 16
 #endif
@@ -43,6 +44,8 @@ class AppObserver {
   virtual ~AppObserver() = default;
   virtual void on_range(const RangeReport& report) = 0;
   virtual void on_output(const NavOutput& output) = 0;
+  // What the estimator did with a GNSS fix (boards with a receiver).
+  virtual void on_gnss(const GnssReport& report) { static_cast<void>(report); }
 };
 
 class App {
@@ -98,6 +101,7 @@ class App {
   [[nodiscard]] bool accept_uwb(const UwbRange& r, uint64_t now_us, SourceStats& src);
   void process_in_time_order();
   void handle_range(const UwbRange& r);
+  void drain_gnss(uint64_t now_us);
 
   hal::Board& board_;
   Params params_;

@@ -4,12 +4,14 @@
 
 #include <cstdint>
 
+#include "estimator/params.hpp"  // UWBNAV_GNSS
+
 namespace uwbnav {
 
 // Why a frame was rejected before reaching the estimator. Stable order (console, CAN).
 enum class RejectReason : uint8_t {
   kNotFinite = 0,     // NaN or Inf in any field
-  kOutOfRange,        // outside physical limits (params in.*, uwb.min/max_range)
+  kOutOfRange,        // outside physical limits (params in.*, uwb.min/max_range; GNSS sigma, latency)
   kUnknownAnchor,     // anchor id not in the site table
   kUnknownTag,        // tag id not in the site table
   kDuplicate,         // same timestamp (and anchor/tag) as an accepted frame
@@ -85,6 +87,9 @@ struct AppStats {
   SourceStats imu;
   SourceStats uwb;
   SourceStats can_rx;             // HIL sensor frames received over CAN
+#if UWBNAV_GNSS
+  SourceStats gnss;               // GNSS fixes (board GnssSource), zero on boards without one
+#endif
   LoopStats loop;
 };
 

@@ -27,6 +27,9 @@ void InputValidator::update_params(const Params& params) {
   min_range_m_ = params[ParamId::kUwbMinRange];
   max_range_m_ = params[ParamId::kUwbMaxRange];
   stale_us_ = param_us(params[ParamId::kInStaleUs]);
+#if UWBNAV_GNSS
+  gnss_max_latency_us_ = param_us(params[ParamId::kGnssMaxLatency] * 1e6F);
+#endif
 }
 
 void InputValidator::reset_history() {
@@ -34,6 +37,10 @@ void InputValidator::reset_history() {
   have_uwb_ = false;
   last_imu_t_us_ = 0;
   last_uwb_t_us_ = 0;
+#if UWBNAV_GNSS
+  have_gnss_ = false;
+  last_gnss_t_us_ = 0;
+#endif
   std::memset(have_pair_, 0, sizeof have_pair_);
 }
 
@@ -82,5 +89,28 @@ Verdict InputValidator::check_uwb(const UwbRange& r, uint64_t now_us) {
   last_pair_t_us_[ai][gi] = r.t_us;
   return v;
 }
+
+#if UWBNAV_GNSS
+Verdict InputValidator::check_gnss(const GnssFix& f, uint64_t now_us) {
+  if (!finite3(f.pos_nav_m) || !finite3(f.pos_sigma_m)) return reject(RejectReason::kNotFinite);
+  // Velocity is optional (NaN = not reported) but never Inf.
+  if (std::isinf(f.vel_nav_mps.x) || std::isinf(f.vel_nav_mps.y) || std::isinf(f.vel_nav_mps.z) ||
+      std::isinf(f.vel_sigma_mps)) {
+    return reject(RejectReason::kNotFinite);
+  }
+  constexpr float kMaxPos_m = 1.0e6F;  // a local navigation frame, not ECEF
+  if (!(f.pos_sigma_m.x > 0.0F && f.pos_sigma_m.y > 0.0F && f.pos_sigma_m.z > 0.0F) || norm3(f.pos_nav_m) > kMaxPos_m ||
+      f.rx_t_us < f.t_us || f.rx_t_us - f.t_us > gnss_max_latency_us_) {
+    return reject(RejectReason::kOutOfRange);
+  }
+  if (have_gnss_ && f.t_us == last_gnss_t_us_) return reject(RejectReason::kDuplicate);
+  if (f.rx_t_us > now_us) return reject(RejectReason::kFuture);
+  if (now_us - f.rx_t_us > stale_us_) return reject(RejectReason::kStale);
+  if (have_gnss_ && f.t_us < last_gnss_t_us_) return reject(RejectReason::kOutOfOrder);
+  have_gnss_ = true;
+  last_gnss_t_us_ = f.t_us;
+  return Verdict{true, RejectReason::kNotFinite};
+}
+#endif
 
 }  // namespace uwbnav

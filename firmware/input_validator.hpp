@@ -1,4 +1,4 @@
-// Input validation: every IMU and UWB frame is checked (NaN/Inf, physical range,
+// Input validation: every IMU, UWB and GNSS frame is checked (NaN/Inf, physical range,
 // unknown anchor/tag, duplicate = same stream/pair and same timestamp,
 // out-of-order, stale, future) and counted per reason before anything reaches
 // the estimator.
@@ -28,6 +28,13 @@ class InputValidator {
   // `now_us` is the loop time of the cycle that drains the frame.
   Verdict check_imu(const ImuSample& s, uint64_t now_us);
   Verdict check_uwb(const UwbRange& r, uint64_t now_us);
+#if UWBNAV_GNSS
+  // GNSS fix: finite position, positive finite claimed sigmas, finite or absent
+  // (NaN) velocity, arrival not before validity, latency within gnss.max_latency
+  // (out of range), arrival stale/future against the loop time, validity time
+  // duplicate/out of order against the last accepted fix.
+  Verdict check_gnss(const GnssFix& f, uint64_t now_us);
+#endif
 
  private:
   Verdict check_time(uint64_t t_us, uint64_t now_us, uint64_t last_t_us, bool have_last) const;
@@ -43,6 +50,11 @@ class InputValidator {
   uint64_t last_imu_t_us_ = 0;
   bool have_uwb_ = false;
   uint64_t last_uwb_t_us_ = 0;
+#if UWBNAV_GNSS
+  uint64_t gnss_max_latency_us_ = 0;
+  bool have_gnss_ = false;
+  uint64_t last_gnss_t_us_ = 0;
+#endif
   // Timestamp of the last accepted range per (anchor index, tag index): duplicate detection.
   uint64_t last_pair_t_us_[kMaxAnchors][kMaxTags] = {};
   bool have_pair_[kMaxAnchors][kMaxTags] = {};

@@ -32,6 +32,16 @@ class UwbSource {
   virtual bool finished() const = 0;
 };
 
+// GNSS fixes in arrival order (docs/dataset-format.md "gnss.csv").
+class GnssSource {
+ public:
+  virtual ~GnssSource() = default;
+  // Pops the oldest pending fix that has arrived by up_to_us (rx_t_us <= up_to_us).
+  // Same status contract as ImuSource::poll.
+  [[nodiscard]] virtual Status poll(uint64_t up_to_us, GnssFix& out) = 0;
+  virtual bool finished() const = 0;
+};
+
 // Classical CAN / CAN FD frame as it crosses the bus.
 struct CanFrame {
   static constexpr uint8_t kFlagExtended = 0x01;  // 29-bit identifier
@@ -114,6 +124,7 @@ struct Board {
   Clock& clock;
   ParamStore& params;
   const SiteConfig& site;
+  GnssSource* gnss = nullptr;  // optional: null on a vehicle without a GNSS receiver
 };
 
 }  // namespace uwbnav::hal

@@ -253,6 +253,27 @@ bool Console::step_stats(size_t step) {
       add_reset_fields(dg);
       break;
     }
+#if UWBNAV_GNSS
+    case 7: {
+      const SourceStats& src = s.gnss;
+      begin("stats src=");
+      add("gnss received=%lu accepted=%lu io_errors=%lu", ul(src.received), ul(src.accepted), ul(src.io_errors));
+      for (uint32_t r = 0; r < kNumRejectReasons; ++r) {
+        add(" %s=%lu", reject_reason_name(static_cast<RejectReason>(r)), ul(src.rejected[r]));
+      }
+      break;
+    }
+    case 8: {
+      // What the estimator did with the accepted fixes, per GnssVerdict.
+      const NavDiagnostics& dg = snap_.nav;
+      begin("stats gnss");
+      add(" received=%lu fused=%lu", ul(dg.gnss_received), ul(dg.gnss_used));
+      for (uint32_t v = 1; v < static_cast<uint32_t>(GnssVerdict::kCount); ++v) {
+        add(" %s=%lu", gnss_verdict_name(static_cast<GnssVerdict>(v)), ul(dg.gnss_rejected[v]));
+      }
+      break;
+    }
+#endif
     default: {
       const LogCounters& lc = logger().counters();
       begin("stats console");

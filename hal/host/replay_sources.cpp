@@ -21,4 +21,13 @@ Status ReplayUwbSource::poll(uint64_t up_to_us, UwbRange& out) {
   return Status::kOk;
 }
 
+Status ReplayGnssSource::poll(uint64_t up_to_us, GnssFix& out) {
+  if (finished()) return Status::kEmpty;
+  const GnssFix& f = (*fixes_)[next_];
+  if (f.rx_t_us > up_to_us) return Status::kEmpty;
+  out = f;
+  ++next_;
+  return Status::kOk;
+}
+
 }  // namespace uwbnav::hal

@@ -1,4 +1,4 @@
-// Host IMU and UWB sources replaying a format v1 recording in timestamp order.
+// Host IMU, UWB and GNSS sources replaying a format v1 recording in timestamp order.
 // The UWB source hands out the range only: the NLOS label never reaches the firmware.
 #pragma once
 
@@ -58,11 +58,32 @@ class ReplayUwbSource : public UwbSource {
   size_t next_ = 0;
 };
 
+// Replays GNSS fixes when they arrive (rx_t_us). The fixes must outlive the source.
+class ReplayGnssSource : public GnssSource {
+ public:
+  explicit ReplayGnssSource(const std::vector<GnssFix>& fixes) : fixes_(&fixes) {}
+  explicit ReplayGnssSource(const dataset::Recording& rec) : fixes_(&rec.gnss) {}
+
+  // kOk with the next fix when its rx_t_us <= up_to_us, kEmpty otherwise.
+  [[nodiscard]] Status poll(uint64_t up_to_us, GnssFix& out) override;
+  bool finished() const override { return next_ >= fixes_->size(); }
+  size_t delivered() const { return next_; }
+  // Arrival time of the next fix [us]; only valid when !finished().
+  uint64_t next_rx_t_us() const { return (*fixes_)[next_].rx_t_us; }
+
+ private:
+  const std::vector<GnssFix>* fixes_;
+  size_t next_ = 0;
+};
+
 // Both replay sources of one recording (which must outlive them).
 struct ReplaySources {
-  explicit ReplaySources(const dataset::Recording& rec) : imu(rec), uwb(rec) {}
+  explicit ReplaySources(const dataset::Recording& rec) : imu(rec), uwb(rec), gnss(rec) {}
   ReplayImuSource imu;
   ReplayUwbSource uwb;
+  ReplayGnssSource gnss;
+  // The board's GNSS source: null when the recording has no gnss.csv.
+  GnssSource* gnss_or_null(const dataset::Recording& rec) { return rec.gnss.empty() ? nullptr : &gnss; }
 };
 
 }  // namespace uwbnav::hal

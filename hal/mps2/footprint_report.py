@@ -133,6 +133,12 @@ def main():
                 "2": "compiled in and on (`UWBNAV_MPS2_RBF_BRIDGE=2`: `ekf.rbf_bridge` = 1 by default), "
                      "training on every cycle of the replay"}.get(rbf, f"`UWBNAV_MPS2_RBF_BRIDGE={rbf}`")
     L.append(f"RBF outage bridge (estimator/rbf_*, docs/ekf.md \"Outage bridging\"): {rbf_text}.")
+    gnss = cfg.get("UWBNAV_MPS2_GNSS", "0")
+    gnss_text = {"0": "compiled out (`UWBNAV_MPS2_GNSS=0`, the board default: the MPS2 board has no receiver; "
+                      "its cost with it in is under \"GNSS fusion\" in docs/ekf.md)",
+                 "1": "compiled in (`UWBNAV_MPS2_GNSS=1`; the replay has no fixes, so the cycle figures do not "
+                      "include GNSS updates)"}.get(gnss, f"`UWBNAV_MPS2_GNSS={gnss}`")
+    L.append(f"GNSS fusion (estimator/mm_gnss.*, navigator_gnss.cpp, docs/ekf.md \"GNSS\"): {gnss_text}.")
     L.append("")
     L.append("## Summary")
     L.append("")

@@ -109,7 +109,7 @@ TEST(ConsoleCommands, StatsShowsLoopSourcesRejectsCanNavAndConsoleCounters) {
   rig.run_s(5.0);
   const uint32_t tx_before = rig.can.counters().tx_ok;  // the firmware keeps sending while the reply goes out
   const auto lines = reply_lines(rig.command("stats"));
-  ASSERT_EQ(lines.size(), 8U);
+  ASSERT_EQ(lines.size(), 10U);
   const AppStats& s = rig.app.stats();
   EXPECT_EQ(lines[0].rfind("stats loop ", 0), 0U);
   EXPECT_EQ(kv(lines[0], "overruns"), "1");
@@ -138,14 +138,20 @@ TEST(ConsoleCommands, StatsShowsLoopSourcesRejectsCanNavAndConsoleCounters) {
   EXPECT_EQ(kv(lines[5], "bus_off"), std::to_string(rig.can.counters().bus_off));
   EXPECT_EQ(lines[6].rfind("stats nav ", 0), 0U);
   EXPECT_EQ(kv(lines[6], "ranges_used"), std::to_string(rig.app.navigator().diagnostics().ranges_used));
-  EXPECT_EQ(lines[7].rfind("stats console ", 0), 0U);
+  // GNSS: the validator's view (no receiver on this board: all zero), then the estimator's.
+  EXPECT_EQ(kv(lines[7], "src"), "gnss");
+  EXPECT_EQ(kv(lines[7], "received"), "0");
+  EXPECT_EQ(lines[8].rfind("stats gnss ", 0), 0U);
+  EXPECT_EQ(kv(lines[8], "fused"), "0");
+  EXPECT_EQ(kv(lines[8], "gate"), "0");
+  EXPECT_EQ(lines[9].rfind("stats console ", 0), 0U);
 }
 
 TEST(ConsoleCommands, StatsShowsCanBusOffFromTheBoard) {
   ConsoleRig rig(sim_recording());
   rig.can.set_state(hal::CanBusState::kBusOff);
   const auto lines = reply_lines(rig.command("stats"));
-  ASSERT_EQ(lines.size(), 8U);
+  ASSERT_EQ(lines.size(), 10U);
   EXPECT_EQ(kv(lines[5], "state"), "bus_off");
   EXPECT_EQ(kv(lines[5], "bus_off"), "1");
 }

@@ -1,5 +1,6 @@
 // Format v1 reader on malformed input: every bad-row kind skipped, counted and
-// warned with its line, and no input (garbage, CRLF, empty, huge) crashes it.
+// warned with its line (gnss.csv included), and no input (garbage, CRLF, empty,
+// huge) crashes it.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,6 +9,7 @@
 
 #include "tests/dataset/dataset_test_util.hpp"
 #include "tools/dataset/recording.hpp"
+#include "tools/dataset/recording_stream.hpp"
 
 namespace uwbnav::dataset {
 namespace {
@@ -160,7 +162,7 @@ TEST(DatasetReader, GarbageBytesNeverCrashAndWarningsAreCapped) {
 
   // Garbage in every file, header included: an error or a load, never a crash.
   for (uint32_t seed = 1; seed <= 40; ++seed) {
-    for (const char* f : {"anchors.csv", "uwb.csv", "imu.csv", "truth.csv", "tags.csv", "meta.ini"}) {
+    for (const char* f : {"anchors.csv", "uwb.csv", "imu.csv", "truth.csv", "tags.csv", "meta.ini", "gnss.csv"}) {
       std::string bytes = seed % 2 == 0 ? std::string(kAnchorsOk).substr(0, 22) : std::string();
       x = seed * 7919U + static_cast<uint32_t>(bytes.size());
       for (size_t i = 0; i < 3000; ++i) {
@@ -406,6 +408,176 @@ TEST(DatasetReader, AStreamEndingMoreThanASecondBeforeTheOtherIsReported) {
   EXPECT_EQ(lines[0], "imu.csv: ends at t=5.000 s, 5.000 s before uwb.csv (last 10.000 s): input stream ended early");
   rec.imu.clear();  // a UWB-only recording has no IMU stream to end early
   EXPECT_TRUE(streams_ended_early(rec).empty());
+}
+
+// gnss.csv (extension of format v1): every malformed row kind is skipped,
+// counted and warned with its line like the other tables; a fix-0 row is
+// receiver output ("no fix"), counted as read without a warning.
+TEST(DatasetReaderGnss, BadGnssRowsAreSkippedWithTheirLineAndFixZeroRowsAreReadSilently) {
+  const std::string dir = scratch_dir();
+  write_file(dir + "/anchors.csv", kAnchorsOk);
+  write_file(dir + "/uwb.csv", "t_s,anchor_id,range_m\n");
+  write_file(dir + "/gnss.csv",
+             "t_s,x_m,y_m,z_m,sx_m,sy_m,sz_m,fix,num_sv,latency_s,vx_mps,vy_mps,vz_mps,sv_mps\n"  // 1
+             "1.0,10,20,1.5,0.8,0.8,1.6,2,12,0.08,1,0,0,0.05\n"  // 2 ok
+             "1.2,,,,,,,0,0,,,,,\n"                              // 3 fix 0: read, not kept, no warning
+             "1.4,abc,20,1.5,0.8,0.8,1.6,2,12,0.08,,,,\n"        // 4 non-numeric
+             "1.6,10,nan,1.5,0.8,0.8,1.6,2,12,0.08,,,,\n"        // 5 NaN
+             "1.8,10,20,1.5,-0.8,0.8,1.6,2,12,0.08,,,,\n"        // 6 negative sigma
+             "2.0,10,20,1.5,0.8,0,1.6,2,12,0.08,,,,\n"           // 7 zero sigma
+             "2.2,10,20,1.5,0.8,0.8,1.6,2,12,-0.01,,,,\n"        // 8 latency < 0
+             "2.4,10,20,1.5,0.8,0.8,1.6,3,12,0.08,,,,\n"         // 9 unknown fix code (3: PPS)
+             "0.5,10,20,1.5,0.8,0.8,1.6,2,12,0.08,,,,\n"         // 10 t_s backwards
+             "2.6,10,20,1.5,0.8,0.8,1.6,2,12,0.08,1,,0,\n"       // 11 partial velocity
+             "2.8,10,20,1.5,0.8,0.8,1.6,2,12,0.08,1,0,0,0\n"     // 12 sv_mps not > 0
+             "3.0,10,20,1.5,0.8,0.8,1.6,2,-4,0.08,,,,\n"         // 13 negative num_sv
+             "3.2,10,20,1.5,0.8,0.8\n"                           // 14 column count
+             "3.4,10,20,1.5,0.8,0.8,1.6,2,12,61,,,,\n"           // 15 latency above 60 s
+             "3.6,11,21,1.5,0.8,0.8,1.6,1,,,,,,\n");             // 16 ok, empty optional cells
+  Recording rec;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << dump(rep);
+  ASSERT_EQ(rec.gnss.size(), 2U) << dump(rep);
+  EXPECT_EQ(rep.rows_read, 3U + 3U) << dump(rep);  // anchors + two fixes + the fix-0 row
+  EXPECT_EQ(rep.rows_skipped, 12U) << dump(rep);
+  EXPECT_EQ(rep.warnings.size(), 12U) << dump(rep);
+  EXPECT_FALSE(has_warning(rep, "gnss.csv:3:", "")) << "a fix-0 row is not malformed: " << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "gnss.csv:4:", "x_m: unparsable")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "gnss.csv:5:", "y_m: not finite")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "gnss.csv:6:", "sx_m: must be > 0")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "gnss.csv:7:", "sy_m: must be > 0")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "gnss.csv:8:", "latency_s: negative")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "gnss.csv:9:", "unknown GGA quality code 3")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "gnss.csv:10:", "backwards")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "gnss.csv:11:", "velocity partly empty")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "gnss.csv:12:", "sv_mps: must be > 0")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "gnss.csv:13:", "num_sv: negative")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "gnss.csv:14:", "expected 14 columns, got 6")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "gnss.csv:15:", "latency_s: above 60 s")) << dump(rep);
+
+  const GnssFix& a = rec.gnss[0];
+  EXPECT_EQ(a.t_us, 1000000U);
+  EXPECT_EQ(a.rx_t_us, 1080000U);
+  EXPECT_EQ(a.fix, GnssFixType::kDgnss);
+  EXPECT_EQ(a.num_sv, 12);
+  EXPECT_EQ(a.pos_nav_m.y, 20.0F);
+  EXPECT_EQ(a.pos_sigma_m.z, 1.6F);
+  EXPECT_EQ(a.vel_nav_mps.x, 1.0F);
+  EXPECT_EQ(a.vel_sigma_mps, 0.05F);
+  const GnssFix& b = rec.gnss[1];
+  EXPECT_EQ(b.t_us, 3600000U);
+  EXPECT_EQ(b.rx_t_us, b.t_us) << "empty latency_s means 0";
+  EXPECT_EQ(b.fix, GnssFixType::kSingle);
+  EXPECT_EQ(b.num_sv, 0) << "empty num_sv means unknown (0)";
+  EXPECT_TRUE(std::isnan(b.vel_nav_mps.x));
+  EXPECT_TRUE(std::isnan(b.vel_sigma_mps));
+}
+
+TEST(DatasetReaderGnss, LatencyGivesTheArrivalTimeAndFixesAreDeliveredInArrivalOrder) {
+  const std::string dir = scratch_dir();
+  write_file(dir + "/anchors.csv", kAnchorsOk);
+  write_file(dir + "/uwb.csv", "t_s,anchor_id,range_m\n");
+  // Validity order 1.0, 1.2, 1.2, 1.4; a slow fix (0.35 s) arrives after the next two.
+  write_file(dir + "/gnss.csv",
+             "t_s,x_m,y_m,z_m,sx_m,sy_m,sz_m,fix,num_sv,latency_s\n"
+             "1.0,1,0,0,1,1,1,1,8,0.35\n"
+             "1.2,2,0,0,1,1,1,1,8,0.05\n"
+             "1.2,3,0,0,1,1,1,1,8,0.15\n"
+             "1.4,4,0,0,1,1,1,1,8,0\n");
+  Recording rec;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << dump(rep);
+  EXPECT_TRUE(rep.warnings.empty()) << dump(rep);
+  ASSERT_EQ(rec.gnss.size(), 4U);
+  const uint64_t want_rx[4] = {1250000, 1350000, 1350000, 1400000};
+  const float want_x[4] = {2, 1, 3, 4};  // tie at 1.35 s: the file's order (stable)
+  for (size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(rec.gnss[i].rx_t_us, want_rx[i]) << i;
+    EXPECT_EQ(rec.gnss[i].pos_nav_m.x, want_x[i]) << i;
+    EXPECT_GE(rec.gnss[i].rx_t_us, rec.gnss[i].t_us) << i;
+  }
+
+  // The streaming reader holds the same fixes once the recording is opened.
+  ReadReport rep2;
+  RecordingStream stream;
+  ASSERT_EQ(stream.open(dir, rep2), Status::kOk) << dump(rep2);
+  ASSERT_EQ(stream.gnss.size(), 4U);
+  for (size_t i = 0; i < 4; ++i) EXPECT_EQ(stream.gnss[i].rx_t_us, want_rx[i]) << i;
+}
+
+TEST(DatasetReaderGnss, RequiredColumnsAloneMeanSingleFixNoLatencyNoVelocity) {
+  const std::string dir = scratch_dir();
+  write_file(dir + "/anchors.csv", kAnchorsOk);
+  write_file(dir + "/uwb.csv", "t_s,anchor_id,range_m\n");
+  write_file(dir + "/gnss.csv", "t_s,x_m,y_m,z_m,sx_m,sy_m,sz_m\n# comment\n5.0,-3.5,7.25,0.5,1.5,1.5,3\n");
+  Recording rec;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << dump(rep);
+  ASSERT_EQ(rec.gnss.size(), 1U);
+  const GnssFix& f = rec.gnss[0];
+  EXPECT_EQ(f.t_us, 5000000U);
+  EXPECT_EQ(f.rx_t_us, f.t_us);
+  EXPECT_EQ(f.fix, GnssFixType::kSingle);
+  EXPECT_EQ(f.num_sv, 0);
+  EXPECT_EQ(f.pos_nav_m.x, -3.5F);
+  EXPECT_EQ(f.pos_sigma_m.z, 3.0F);
+  EXPECT_TRUE(std::isnan(f.vel_nav_mps.x) && std::isnan(f.vel_nav_mps.y) && std::isnan(f.vel_nav_mps.z));
+  EXPECT_TRUE(std::isnan(f.vel_sigma_mps));
+
+  // A leading part of the optional columns is a valid header too; a skipped one is not.
+  write_file(dir + "/gnss.csv", "t_s,x_m,y_m,z_m,sx_m,sy_m,sz_m,fix,num_sv\n5.0,1,2,3,1,1,2,4,20\n");
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << dump(rep);
+  ASSERT_EQ(rec.gnss.size(), 1U);
+  EXPECT_EQ(rec.gnss[0].fix, GnssFixType::kRtkFixed);
+  EXPECT_EQ(rec.gnss[0].num_sv, 20);
+  write_file(dir + "/gnss.csv", "t_s,x_m,y_m,z_m,sx_m,sy_m,sz_m,latency_s\n5.0,1,2,3,1,1,2,0.1\n");
+  rep = ReadReport{};
+  EXPECT_EQ(read_recording(dir, rec, rep), Status::kInvalidArgument);
+  EXPECT_EQ(rep.error.rfind("gnss.csv:1: wrong header", 0), 0U) << rep.error;
+}
+
+TEST(DatasetReaderGnss, RecordingWithoutGnssCsvReadsAsBeforeWithNoFixesAndNoLever) {
+  const std::string dir = scratch_dir();
+  write_file(dir + "/anchors.csv", kAnchorsOk);
+  write_file(dir + "/uwb.csv", "t_s,anchor_id,range_m\n0.1,1,5.0\n");
+  write_file(dir + "/imu.csv", "t_s,ax_mps2,ay_mps2,az_mps2,gx_radps,gy_radps,gz_radps\n0.0,0,0,9.81,0,0,0\n");
+  Recording rec;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << dump(rep);
+  EXPECT_TRUE(rec.gnss.empty());
+  EXPECT_TRUE(rep.warnings.empty()) << dump(rep);
+  EXPECT_EQ(rep.rows_read, 3U + 1U + 1U);
+  EXPECT_EQ(rec.uwb.size(), 1U);
+  EXPECT_EQ(rec.imu.size(), 1U);
+  EXPECT_EQ(rec.site.gnss_lever_body_m.x, 0.0F);
+  EXPECT_EQ(rec.site.gnss_lever_body_m.y, 0.0F);
+  EXPECT_EQ(rec.site.gnss_lever_body_m.z, 0.0F);
+}
+
+TEST(DatasetReaderGnss, MetaGnssLeverTakesCommasOrBlanksAndRejectsAnythingElse) {
+  const std::string dir = scratch_dir();
+  write_file(dir + "/anchors.csv", kAnchorsOk);
+  write_file(dir + "/uwb.csv", "t_s,anchor_id,range_m\n");
+  for (const char* good : {"0.5,-0.25,1.5", "0.5 -0.25 1.5", "0.5, -0.25,\t1.5"}) {
+    write_file(dir + "/meta.ini", std::string("gnss_lever_m = ") + good + "\n");
+    Recording rec;
+    ReadReport rep;
+    ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << dump(rep);
+    EXPECT_TRUE(rep.warnings.empty()) << good << "\n" << dump(rep);
+    EXPECT_EQ(rec.site.gnss_lever_body_m.x, 0.5F) << good;
+    EXPECT_EQ(rec.site.gnss_lever_body_m.y, -0.25F) << good;
+    EXPECT_EQ(rec.site.gnss_lever_body_m.z, 1.5F) << good;
+  }
+  for (const char* bad : {"0.5,1.5", "0.5,1.5,2,3", "0.5,x,1", "0.5,nan,1", "0.5,0,101", ""}) {
+    write_file(dir + "/meta.ini", std::string("gnss_lever_m = ") + bad + "\n");
+    Recording rec;
+    ReadReport rep;
+    ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << dump(rep);
+    EXPECT_TRUE(has_warning(rep, "meta.ini:1:", "gnss_lever_m")) << bad << "\n" << dump(rep);
+    EXPECT_EQ(rec.site.gnss_lever_body_m.x, 0.0F) << bad;
+    EXPECT_EQ(rec.site.gnss_lever_body_m.z, 0.0F) << bad;
+    EXPECT_EQ(rec.meta.count("gnss_lever_m"), 0U) << bad;
+  }
 }
 
 }  // namespace

@@ -1,13 +1,16 @@
 // Format v1 writer/reader round trips: read(write(x)) reproduces every
-// estimator input bit for bit; replay outputs read back; a one-hour IMU loads fast.
+// estimator input bit for bit (GNSS fixes and lever included); replay outputs
+// read back; a one-hour IMU loads fast.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "tests/dataset/dataset_test_util.hpp"
 #include "tools/dataset/recording.hpp"
@@ -221,6 +224,136 @@ TEST(DatasetRoundTrip, OneHourOfImuAt100HzLoadsInWellUnderASecond) {
   EXPECT_EQ(back.uwb.size(), 180000U);
   // Generous bound so sanitizer/debug builds pass; Release reads in ~0.2 s.
   EXPECT_LT(read_s, 5.0);
+}
+
+// Fixes with every optional field used somewhere; latencies vary so the
+// arrival order differs from the validity order. In arrival order, as the
+// reader returns them.
+std::vector<GnssFix> make_gnss() {
+  std::vector<GnssFix> fixes;
+  const uint64_t t0_us = 1723710007000000ULL;
+  for (uint64_t k = 0; k < 40; ++k) {
+    GnssFix f;
+    f.t_us = t0_us + k * 200000U;
+    f.rx_t_us = f.t_us + (k % 3 == 0 ? 310000U : 45000U + k * 1000U);
+    f.pos_nav_m = Vec3f{1.0F / 3.0F + static_cast<float>(k), -123.456F, 0.1F * static_cast<float>(k % 7)};
+    f.pos_sigma_m = Vec3f{0.8F, 0.8125F, 1.7F};
+    if (k % 4 != 1) {
+      f.vel_nav_mps = Vec3f{2.5F, -0.0F, 1e-7F};
+      f.vel_sigma_mps = k % 4 == 2 ? kNaNf : 0.05F;
+    }
+    f.fix = k % 5 == 0 ? GnssFixType::kRtkFloat : k % 5 == 1 ? GnssFixType::kRtkFixed : GnssFixType::kDgnss;
+    f.num_sv = static_cast<uint8_t>(k % 2 == 0 ? 0 : 4 + k);
+    fixes.push_back(f);
+  }
+  std::stable_sort(fixes.begin(), fixes.end(),
+                   [](const GnssFix& a, const GnssFix& b) { return a.rx_t_us < b.rx_t_us; });
+  return fixes;
+}
+
+void expect_same_gnss(const std::vector<GnssFix>& a, const std::vector<GnssFix>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    const GnssFix& x = a[i];
+    const GnssFix& y = b[i];
+    ASSERT_EQ(x.t_us, y.t_us) << i;
+    ASSERT_EQ(x.rx_t_us, y.rx_t_us) << i;
+    ASSERT_EQ(x.fix, y.fix) << i;
+    ASSERT_EQ(x.num_sv, y.num_sv) << i;
+    ASSERT_TRUE(same_bits(x.pos_nav_m.x, y.pos_nav_m.x) && same_bits(x.pos_nav_m.y, y.pos_nav_m.y) &&
+                same_bits(x.pos_nav_m.z, y.pos_nav_m.z) && same_bits(x.pos_sigma_m.x, y.pos_sigma_m.x) &&
+                same_bits(x.pos_sigma_m.y, y.pos_sigma_m.y) && same_bits(x.pos_sigma_m.z, y.pos_sigma_m.z) &&
+                same_bits(x.vel_nav_mps.x, y.vel_nav_mps.x) && same_bits(x.vel_nav_mps.y, y.vel_nav_mps.y) &&
+                same_bits(x.vel_nav_mps.z, y.vel_nav_mps.z) && same_bits(x.vel_sigma_mps, y.vel_sigma_mps))
+        << "gnss fix " << i;
+  }
+}
+
+TEST(DatasetRoundTripGnss, GnssFixesAndAntennaLeverReadBackBitForBitInArrivalOrder) {
+  std::mt19937 rng(11);
+  Recording rec = make_recording(rng, 200, 100);
+  rec.gnss = make_gnss();
+  rec.site.gnss_lever_body_m = Vec3f{1.25F, -0.1F, 1.0F / 3.0F};
+  const std::string dir = scratch_dir();
+  ASSERT_EQ(write_recording(dir, rec), Status::kOk);
+  const std::string text = read_text(dir + "/gnss.csv");
+  EXPECT_EQ(text.substr(0, text.find('\n')),
+            "t_s,x_m,y_m,z_m,sx_m,sy_m,sz_m,fix,num_sv,latency_s,vx_mps,vy_mps,vz_mps,sv_mps");
+  EXPECT_NE(read_text(dir + "/meta.ini").find("gnss_lever_m = 1.25,-0.1,0.33333334\n"), std::string::npos)
+      << read_text(dir + "/meta.ini");
+
+  Recording back;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, back, rep), Status::kOk) << dump(rep);
+  EXPECT_TRUE(rep.warnings.empty()) << dump(rep);
+  expect_same(rec, back);
+  expect_same_gnss(rec.gnss, back.gnss);
+  EXPECT_TRUE(same_bits(back.site.gnss_lever_body_m.x, 1.25F));
+  EXPECT_TRUE(same_bits(back.site.gnss_lever_body_m.y, -0.1F));
+  EXPECT_TRUE(same_bits(back.site.gnss_lever_body_m.z, 1.0F / 3.0F));
+
+  // Written again from what was read: byte-identical files.
+  const std::string dir2 = dir + "/again";
+  ASSERT_EQ(write_recording(dir2, back), Status::kOk);
+  for (const char* f : {"gnss.csv", "meta.ini"}) EXPECT_EQ(read_text(dir + "/" + f), read_text(dir2 + "/" + f)) << f;
+}
+
+TEST(DatasetRoundTripGnss, OptionalGnssColumnsWrittenOnlyUpToTheLastOneUsed) {
+  Recording rec;
+  ASSERT_EQ(rec.site.add_anchor(1, Vec3f{1, 2, 3}), Status::kOk);
+  ASSERT_EQ(rec.site.add_tag(0, Vec3f{}), Status::kOk);
+  GnssFix f;
+  f.t_us = 2000000;
+  f.rx_t_us = f.t_us;
+  f.pos_nav_m = Vec3f{10.5F, -4.0F, 0.25F};
+  f.pos_sigma_m = Vec3f{0.5F, 0.5F, 1.0F};
+  rec.gnss.push_back(f);
+  const std::string dir = scratch_dir();
+  ASSERT_EQ(write_recording(dir, rec), Status::kOk);
+  EXPECT_EQ(read_text(dir + "/gnss.csv"), "t_s,x_m,y_m,z_m,sx_m,sy_m,sz_m\n2.000000,10.5,-4,0.25,0.5,0.5,1\n");
+  EXPECT_NE(read_text(dir + "/meta.ini").find("gnss_lever_m = 0,0,0\n"), std::string::npos)
+      << "a receiver at the body origin still says so";
+
+  rec.gnss[0].rx_t_us += 80000;
+  ASSERT_EQ(write_recording(dir, rec), Status::kOk);
+  EXPECT_EQ(read_text(dir + "/gnss.csv"),
+            "t_s,x_m,y_m,z_m,sx_m,sy_m,sz_m,fix,num_sv,latency_s\n2.000000,10.5,-4,0.25,0.5,0.5,1,1,0,0.080000\n");
+  Recording back;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, back, rep), Status::kOk) << dump(rep);
+  expect_same_gnss(rec.gnss, back.gnss);
+
+  // Velocity on one fix only: the others get three empty cells, never a partial velocity.
+  GnssFix g = rec.gnss[0];
+  g.t_us += 200000;
+  g.rx_t_us += 200000;
+  g.vel_nav_mps = Vec3f{1.0F, 2.0F, 0.0F};
+  rec.gnss.push_back(g);
+  ASSERT_EQ(write_recording(dir, rec), Status::kOk);
+  EXPECT_EQ(read_text(dir + "/gnss.csv"),
+            "t_s,x_m,y_m,z_m,sx_m,sy_m,sz_m,fix,num_sv,latency_s,vx_mps,vy_mps,vz_mps\n"
+            "2.000000,10.5,-4,0.25,0.5,0.5,1,1,0,0.080000,,,\n"
+            "2.200000,10.5,-4,0.25,0.5,0.5,1,1,0,0.080000,1,2,0\n");
+  ASSERT_EQ(read_recording(dir, back, rep), Status::kOk) << dump(rep);
+  expect_same_gnss(rec.gnss, back.gnss);
+}
+
+TEST(DatasetRoundTripGnss, RecordingWithoutGnssWritesNoGnssFileNoLeverAndRemovesAStaleOne) {
+  std::mt19937 rng(5);
+  Recording rec = make_recording(rng, 10, 10);
+  rec.gnss = make_gnss();
+  const std::string dir = scratch_dir();
+  ASSERT_EQ(write_recording(dir, rec), Status::kOk);
+  ASSERT_TRUE(std::filesystem::exists(dir + "/gnss.csv"));
+  rec.gnss.clear();
+  ASSERT_EQ(write_recording(dir, rec), Status::kOk);
+  EXPECT_FALSE(std::filesystem::exists(dir + "/gnss.csv"));
+  EXPECT_EQ(read_text(dir + "/meta.ini").find("gnss_lever_m"), std::string::npos)
+      << "meta.ini of a recording without a receiver is as before";
+  Recording back;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, back, rep), Status::kOk) << dump(rep);
+  EXPECT_TRUE(back.gnss.empty());
 }
 
 TEST(DatasetOutputs, EstimatesWriteAndReadBack) {

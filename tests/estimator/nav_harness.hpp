@@ -72,10 +72,11 @@ inline bool output_well_formed(const NavOutput& o) {
 
 // Replays `rec` (IMU and ranges merged by time, output each 10 ms), scoring
 // valid outputs in [t_from_us, t_to_us) (0 = whole run). `params` may be
-// adjusted by the caller. `reports` receives every RangeReport when not null.
+// adjusted by the caller. `reports` receives every RangeReport when not null;
+// the recording's GNSS fixes (if any) are fed on arrival, `gnss_reports` gets theirs.
 inline RunScore replay(const dataset::Recording& rec, const Params& params, uint64_t t_from_us = 0,
                        uint64_t t_to_us = UINT64_MAX, std::vector<RangeReport>* reports = nullptr,
-                       bool drop_imu = false) {
+                       bool drop_imu = false, std::vector<GnssReport>* gnss_reports = nullptr) {
   RunScore score;
   auto nav = std::make_unique<Navigator>();
   SiteConfig site = rec.site;
@@ -88,6 +89,7 @@ inline RunScore replay(const dataset::Recording& rec, const Params& params, uint
   const auto& imu = drop_imu ? no_imu : rec.imu;
   size_t i_imu = 0;
   size_t i_uwb = 0;
+  size_t i_gnss = 0;
   uint64_t t0 = UINT64_MAX;
   if (!imu.empty()) t0 = imu.front().t_us;
   if (!rec.uwb.empty()) t0 = std::min(t0, rec.uwb.front().range.t_us);
@@ -110,6 +112,11 @@ inline RunScore replay(const dataset::Recording& rec, const Params& params, uint
         const RangeReport r = nav->on_range(rec.uwb[i_uwb++].range);
         if (reports != nullptr) reports->push_back(r);
       }
+    }
+    // GNSS fixes after the cycle's IMU and ranges, when they arrive (as firmware/app.cpp).
+    while (i_gnss < rec.gnss.size() && rec.gnss[i_gnss].rx_t_us <= t_cycle) {
+      const GnssReport g = nav->on_gnss(rec.gnss[i_gnss++]);
+      if (gnss_reports != nullptr) gnss_reports->push_back(g);
     }
     ScoredOutput so;
     so.out = nav->output(t_cycle);

@@ -1,5 +1,6 @@
 // Analytic Jacobians of every measurement model (range with lever arm, time
-// offset, scale error, tag and anchor offsets; NHC, ZUPT/ZARU, height) against
+// offset, scale error, tag and anchor offsets; NHC, ZUPT/ZARU, height; GNSS
+// antenna position and velocity with lever arm and latency) against
 // central differences of the nominal model under error injection; singular
 // range geometry stays finite.
 #include <gtest/gtest.h>
@@ -8,6 +9,7 @@
 #include <functional>
 
 #include "error_injection.hpp"
+#include "estimator/mm_gnss.hpp"
 #include "estimator/mm_height.hpp"
 #include "estimator/mm_nhc.hpp"
 #include "estimator/mm_position.hpp"
@@ -178,6 +180,67 @@ TEST(MmPosition, JacobianMatchesNumericOnBothHorizontalAxes) {
     EXPECT_NEAR(static_cast<double>(obs.innovation), 2.5 - static_cast<double>(x.pos_nav_m(axis)), 1e-6);
     EXPECT_EQ(obs.r_var, Real(0.04));
   }
+}
+
+// GNSS antenna prediction of a late fix (dt < 0) on a turning vehicle with a
+// 1.5 m mast: the innovation is measured minus predicted, so the Jacobian of
+// the prediction is minus the numeric derivative of the innovation.
+GnssPredictionInput gnss_input(const NominalState& x, Real dt) {
+  GnssPredictionInput in;
+  in.x = &x;
+  in.c_nav_body = quat_to_dcm(x.q_nav_body);
+  in.gyro_body_radps = Vec3(Real(0.3), Real(-0.2), Real(0.8));
+  in.accel_nav_mps2 = Vec3(Real(1.5), Real(-0.7), Real(0.1));
+  in.lever_body_m = Vec3(Real(0.8), Real(-0.3), Real(1.5));
+  in.dt_s = dt;
+  return in;
+}
+
+TEST(MmGnss, PositionJacobianWithLeverArmAndLatencyMatchesNumericOnEveryAxis) {
+  const NominalState x = sample_state();
+  const Real dt = Real(-0.12);
+  for (int axis = 0; axis < 3; ++axis) {
+    const ScalarObs obs = mm_gnss_position(gnss_input(x, dt), axis, Real(0), Real(1));
+    const ErrRow num = numeric_jacobian(x, [&](const NominalState& y) {
+      return -static_cast<double>(mm_gnss_position(gnss_input(y, dt), axis, Real(0), Real(1)).innovation);
+    });
+    expect_row_near(obs.h, num, kTol);
+    EXPECT_EQ(obs.h(ErrIdx::kPos + axis), Real(1)) << "axis " << axis;
+    EXPECT_EQ(obs.h(ErrIdx::kVel + axis), dt) << "the fix describes the state dt earlier";
+    // Nothing of the range errors: GNSS does not see the UWB offsets.
+    EXPECT_EQ(obs.h.tail<ErrIdx::kRange>().norm(), Real(0));
+  }
+}
+
+TEST(MmGnss, VelocityJacobianWithLeverArmRotationMatchesNumericOnEveryAxis) {
+  const NominalState x = sample_state();
+  for (int axis = 0; axis < 3; ++axis) {
+    const ScalarObs obs = mm_gnss_velocity(gnss_input(x, Real(-0.08)), axis, Real(0), Real(1));
+    const ErrRow num = numeric_jacobian(x, [&](const NominalState& y) {
+      return -static_cast<double>(mm_gnss_velocity(gnss_input(y, Real(-0.08)), axis, Real(0), Real(1)).innovation);
+    });
+    expect_row_near(obs.h, num, kTol);
+    // The mast's rotation (w x l) ties the velocity to attitude and gyro bias.
+    EXPECT_GT(obs.h.segment<3>(ErrIdx::kAtt).norm() + obs.h.segment<3>(ErrIdx::kBg).norm(), Real(0.1));
+  }
+}
+
+TEST(MmGnss, PredictsTheAntennaNotTheBodyOriginAtTheFixTime) {
+  NominalState x;
+  x.pos_nav_m = Vec3(Real(10), Real(20), Real(0));
+  x.vel_nav_mps = Vec3(Real(5), Real(0), Real(0));
+  x.q_nav_body = quat_from_yaw(kPi / Real(2));  // body x points to nav y
+  GnssPredictionInput in;
+  in.x = &x;
+  in.c_nav_body = quat_to_dcm(x.q_nav_body);
+  in.lever_body_m = Vec3(Real(1), Real(0), Real(1.5));
+  in.dt_s = Real(-0.1);  // 100 ms latency: 0.5 m back along the track
+  const Real tol = Real(1e-5);
+  EXPECT_NEAR(static_cast<double>(mm_gnss_position(in, 0, Real(9.5), Real(1)).innovation), 0.0, tol);
+  EXPECT_NEAR(static_cast<double>(mm_gnss_position(in, 1, Real(21), Real(1)).innovation), 0.0, tol);
+  EXPECT_NEAR(static_cast<double>(mm_gnss_position(in, 2, Real(1.5), Real(1)).innovation), 0.0, tol);
+  // Axis out of range is clamped, never an out-of-bounds read.
+  EXPECT_TRUE(std::isfinite(mm_gnss_position(in, 7, Real(0), Real(1)).innovation));
 }
 
 }  // namespace

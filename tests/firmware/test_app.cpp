@@ -44,6 +44,19 @@ class ScriptUwb final : public hal::UwbSource, public ScriptSource<UwbRange> {
   bool finished() const override { return frames.empty(); }
 };
 
+// GNSS fixes in arrival order (rx_t_us is what becomes due).
+class ScriptGnss final : public hal::GnssSource {
+ public:
+  std::deque<GnssFix> frames;
+  Status poll(uint64_t up_to_us, GnssFix& out) override {
+    if (frames.empty() || frames.front().rx_t_us > up_to_us) return Status::kEmpty;
+    out = frames.front();
+    frames.pop_front();
+    return Status::kOk;
+  }
+  bool finished() const override { return frames.empty(); }
+};
+
 SiteConfig square_site() {
   SiteConfig s;
   EXPECT_TRUE(ok(s.add_anchor(1, {0, 0, 2})));
@@ -150,6 +163,81 @@ TEST(FirmwareValidation, MalformedFramesAreRejectedPerReasonAndNeverReachTheEsti
   EXPECT_EQ(app.navigator().diagnostics().ranges_received, 3U);
   EXPECT_EQ(obs.ranges, 3U);
   EXPECT_FALSE(obs.any_nan);
+}
+
+GnssFix gnss_fix(uint64_t t_us, uint64_t latency_us) {
+  GnssFix f;
+  f.t_us = t_us;
+  f.rx_t_us = t_us + latency_us;
+  f.pos_nav_m = {5.0F, 5.0F, 1.5F};
+  f.pos_sigma_m = {0.5F, 0.5F, 1.0F};
+  f.fix = GnssFixType::kDgnss;
+  f.num_sv = 10;
+  return f;
+}
+
+class GnssCountingObserver final : public AppObserver {
+ public:
+  uint64_t gnss = 0;
+  void on_range(const RangeReport&) override {}
+  void on_output(const NavOutput&) override {}
+  void on_gnss(const GnssReport&) override { ++gnss; }
+};
+
+TEST(FirmwareValidation, MalformedGnssFixesAreRejectedPerReasonAndNeverReachTheEstimator) {
+  const SiteConfig site = square_site();
+  ScriptImu imu;
+  ScriptUwb uwb;
+  ScriptGnss gnss;
+  hal::LockstepClock clock;
+  hal::MemCanBus can;
+  hal::NullSerialPort serial;
+  hal::EmptyParamStore store;
+  hal::Board board{imu, uwb, can, serial, clock, store, site, &gnss};
+
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  // In arrival order: the source hands out a fix once its arrival is due.
+  gnss.frames.push_back(gnss_fix(100000, 80000));   // good
+  GnssFix f = gnss_fix(200000, 80000);
+  f.pos_nav_m.y = nan;
+  gnss.frames.push_back(f);                         // not finite
+  f = gnss_fix(300000, 80000);
+  f.vel_nav_mps = {1.0F, inf, 0.0F};
+  gnss.frames.push_back(f);                         // not finite: velocity Inf (NaN means "not reported")
+  f = gnss_fix(400000, 80000);
+  f.pos_sigma_m.x = 0.0F;
+  gnss.frames.push_back(f);                         // out of range: a zero claimed sigma
+  f = gnss_fix(500000, 0);
+  f.rx_t_us = 490000;
+  gnss.frames.push_back(f);                         // out of range: arrived before its time of validity
+  gnss.frames.push_back(gnss_fix(310000, 600000));  // out of range: latency 0.6 s > gnss.max_latency 0.5 s
+  gnss.frames.push_back(gnss_fix(1000000, 40000));  // good
+  gnss.frames.push_back(gnss_fix(1000000, 45000));  // duplicate time of validity
+  gnss.frames.push_back(gnss_fix(900000, 150000));  // out of order: validity before the last accepted
+
+  App app(board);
+  ASSERT_TRUE(ok(app.init()));
+  GnssCountingObserver obs;
+  app.set_observer(&obs);
+  for (uint64_t t = 10000; t <= 1100000; t += 10000) app.tick(t);
+  // A fix that arrived 0.79 s before the loop drains it (in.stale_us 0.2 s): stale.
+  gnss.frames.push_back(gnss_fix(1200000, 10000));
+  app.tick(2000000);
+
+  const AppStats& st = app.stats();
+  auto rej = [&](RejectReason r) { return st.gnss.rejected[static_cast<size_t>(r)]; };
+  EXPECT_EQ(st.gnss.received, 10U);
+  EXPECT_EQ(rej(RejectReason::kNotFinite), 2U);
+  EXPECT_EQ(rej(RejectReason::kOutOfRange), 3U);
+  EXPECT_EQ(rej(RejectReason::kDuplicate), 1U);
+  EXPECT_EQ(rej(RejectReason::kOutOfOrder), 1U);
+  EXPECT_EQ(rej(RejectReason::kStale), 1U);
+  EXPECT_EQ(st.gnss.accepted, 2U);
+  EXPECT_EQ(st.gnss.accepted + st.gnss.rejected_total(), st.gnss.received);
+  // Only accepted fixes reached the estimator.
+  EXPECT_EQ(app.navigator().diagnostics().gnss_received, 2U);
+  EXPECT_EQ(obs.gnss, 2U);
 }
 
 TEST(FirmwareHeap, NoHeapAllocationAfterStartUpDuringLongLockstepReplay) {

@@ -39,6 +39,19 @@ class VectorUwbSource final : public hal::UwbSource {
   bool finished() const override { return next >= ranges.size(); }
 };
 
+// GNSS fixes in vector order, each due at its arrival time (rx_t_us).
+class VectorGnssSource final : public hal::GnssSource {
+ public:
+  std::vector<GnssFix> fixes;
+  size_t next = 0;
+  Status poll(uint64_t up_to_us, GnssFix& out) override {
+    if (next >= fixes.size() || fixes[next].rx_t_us > up_to_us) return Status::kEmpty;
+    out = fixes[next++];
+    return Status::kOk;
+  }
+  bool finished() const override { return next >= fixes.size(); }
+};
+
 class SinkCanBus final : public hal::CanBus {
  public:
   Status send(const hal::CanFrame&) override {

@@ -1,8 +1,9 @@
 // libFuzzer target: the format v1 recording reader, one file type per input.
 // First byte selects the file the rest of the input becomes (anchors, tags,
-// uwb, imu, truth, meta.ini, uwb.csv.gz, site calibration text); the other
-// files of the recording are fixed and valid. A read that succeeds must hold
-// only finite, time-ordered rows within the table capacities.
+// uwb, imu, truth, meta.ini, uwb.csv.gz, site calibration text, gnss.csv); the
+// other files of the recording are fixed and valid. A read that succeeds must
+// hold only finite, time-ordered rows within the table capacities, and GNSS
+// fixes with positive sigmas, arriving no earlier than their validity, in arrival order.
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -56,6 +57,17 @@ void check(const uwbnav::dataset::Recording& rec) {
     if (!std::isfinite(s.accel_body_mps2.x) || !std::isfinite(s.gyro_body_radps.z) || s.t_us < last) std::abort();
     last = s.t_us;
   }
+  last = 0;
+  for (const auto& g : rec.gnss) {
+    if (g.fix == GnssFixType::kNone || g.rx_t_us < g.t_us || g.rx_t_us < last) std::abort();
+    if (!std::isfinite(g.pos_nav_m.x) || !std::isfinite(g.pos_nav_m.y) || !std::isfinite(g.pos_nav_m.z)) std::abort();
+    for (float sigma : {g.pos_sigma_m.x, g.pos_sigma_m.y, g.pos_sigma_m.z}) {
+      if (!(sigma > 0.0F) || !std::isfinite(sigma)) std::abort();
+    }
+    if (std::isfinite(g.vel_nav_mps.x) != std::isfinite(g.vel_nav_mps.z)) std::abort();
+    last = g.rx_t_us;
+  }
+  if (!std::isfinite(rec.site.gnss_lever_body_m.x) || !std::isfinite(rec.site.gnss_lever_body_m.z)) std::abort();
 }
 
 }  // namespace
@@ -64,7 +76,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace uwbnav;
   if (size == 0 || size > 65536) return 0;
   static const char* kFiles[] = {"anchors.csv", "tags.csv", "uwb.csv", "imu.csv", "truth.csv", "meta.ini"};
-  const uint8_t sel = data[0] % 8U;
+  const uint8_t sel = data[0] % 9U;
   ++data;
   --size;
   if (sel == 7) {
@@ -83,11 +95,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   put("uwb.csv", "t_s,anchor_id,range_m\n1.0,1,10.0\n1.1,2,20.0\n");
   put("imu.csv", "t_s,ax_mps2,ay_mps2,az_mps2,gx_radps,gy_radps,gz_radps\n1.0,0,0,9.8,0,0,0\n");
   put("truth.csv", "t_s,x_m,y_m,z_m\n1.0,5,5,0\n");
-  put("meta.ini", "name = fuzz\n");
+  put("meta.ini", "name = fuzz\ngnss_lever_m = 0.5,0,1.5\n");
+  put("gnss.csv", "t_s,x_m,y_m,z_m,sx_m,sy_m,sz_m,fix,num_sv,latency_s\n1.0,5,5,1.5,0.8,0.8,1.6,2,12,0.08\n");
   drop("uwb.csv.gz");
   if (sel == 6) {
     drop("uwb.csv");
     put("uwb.csv.gz", data, size);
+  } else if (sel == 8) {
+    put("gnss.csv", data, size);
   } else {
     put(kFiles[sel], data, size);
   }

@@ -1,10 +1,11 @@
-// libFuzzer target: arbitrary IMU/UWB sample sequences through the firmware
+// libFuzzer target: arbitrary IMU/UWB/GNSS sample sequences through the firmware
 // (App::tick: InputValidator, then the estimator). Whenever the output status
 // says valid, position, velocity, attitude and claimed sigmas must be finite
 // and bounded; anything else aborts (a finding).
-// Input: 1 header byte (bit 0 has IMU, bit 1 air platform), then records:
-// 1 tag byte (bit 0 UWB else IMU, bit 1 raw float bits + signed time step,
-// bits 2-7 time step [ms]) and its payload (docs/hardening.md).
+// Input: 1 header byte (bit 0 has IMU, bit 1 air platform, bit 2 GNSS antenna
+// on a 1.2 m mast), then records: 1 tag byte (bit 0 UWB or GNSS else IMU, bit 1
+// raw float bits + signed time step, bits 2-7 time step [ms]) and its payload;
+// a UWB record whose first payload byte is >= 192 is a GNSS fix (docs/hardening.md).
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -61,18 +62,60 @@ void check_output(const uwbnav::NavOutput& o) {
   if (!std::isfinite(o.heading_rad)) finding("valid output with heading not finite", o);
 }
 
+// One GNSS fix: position, claimed sigmas, arrival, fix type and satellites,
+// velocity when `with_vel`. Scaled integers, or raw float bits (any value,
+// arrival before validity included) when `raw`.
+uwbnav::GnssFix gnss_record(ByteReader& in, uint64_t t_us, bool raw, bool with_vel) {
+  using namespace uwbnav;
+  GnssFix f;
+  f.t_us = t_us;
+  if (raw) {
+    f.pos_nav_m = Vec3f{in.f32_bits(), in.f32_bits(), in.f32_bits()};
+    f.pos_sigma_m = Vec3f{in.f32_bits(), in.f32_bits(), in.f32_bits()};
+    const int64_t latency_us = static_cast<int64_t>(static_cast<int16_t>(in.u16())) * 100;
+    f.rx_t_us = latency_us < 0 && static_cast<uint64_t>(-latency_us) > t_us ? 0 : t_us + static_cast<uint64_t>(latency_us);
+    if (with_vel) {
+      f.vel_nav_mps = Vec3f{in.f32_bits(), in.f32_bits(), in.f32_bits()};
+      f.vel_sigma_mps = in.f32_bits();
+    }
+  } else {
+    const auto p = [&] { return static_cast<float>(static_cast<int16_t>(in.u16())) * 0.01F; };
+    const float x = p();
+    const float y = p();
+    const float z = p();
+    f.pos_nav_m = Vec3f{x, y, z};
+    const float sh = static_cast<float>(in.u8() + 1U) * 0.05F;
+    const float sv = static_cast<float>(in.u8() + 1U) * 0.05F;
+    f.pos_sigma_m = Vec3f{sh, sh, sv};
+    f.rx_t_us = t_us + static_cast<uint64_t>(in.u8()) * 2000U;  // 0..510 ms latency
+    if (with_vel) {
+      const float vx = p();
+      const float vy = p();
+      const float vz = p();
+      f.vel_nav_mps = Vec3f{vx, vy, vz};
+      f.vel_sigma_mps = static_cast<float>(in.u8() + 1U) * 0.01F;
+    }
+  }
+  const uint8_t q = in.u8();
+  f.fix = static_cast<GnssFixType>(q % 6U);  // 3 is no NMEA code: ranks as "no fix"
+  f.num_sv = in.u8();
+  return f;
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace uwbnav;
   ByteReader in(data, size);
   const uint8_t header = in.u8();
-  const SiteConfig site = fuzz::square_site((header & 1U) != 0, (header & 2U) != 0 ? Platform::kAir : Platform::kGround);
+  SiteConfig site = fuzz::square_site((header & 1U) != 0, (header & 2U) != 0 ? Platform::kAir : Platform::kGround);
+  if ((header & 4U) != 0) site.gnss_lever_body_m = Vec3f{0.5F, 0.0F, 1.2F};
 
   fuzz::VectorImuSource imu;
   fuzz::VectorUwbSource uwb;
   int64_t t_us = static_cast<int64_t>(kStartUs);
-  while (in.left() > 0 && imu.samples.size() + uwb.ranges.size() < 4096) {
+  fuzz::VectorGnssSource gnss;
+  while (in.left() > 0 && imu.samples.size() + uwb.ranges.size() + gnss.fixes.size() < 4096) {
     const uint8_t tag = in.u8();
     const bool raw = (tag & 2U) != 0;
     int64_t dt_ms = tag >> 2;
@@ -100,9 +143,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       }
       imu.samples.push_back(s);
     } else {
+      const uint8_t who = in.u8();
+      if (who >= 192U) {
+        gnss.fixes.push_back(gnss_record(in, t, raw, (who & 1U) != 0));
+        continue;
+      }
       UwbRange r;
       r.t_us = t;
-      const uint8_t who = in.u8();
       r.anchor_id = static_cast<uint16_t>(who % 6U);  // 1..4 known, 0 and 5 unknown
       r.tag_id = static_cast<uint8_t>((who >> 3) & 1U);  // 1 unknown
       if (raw) {
@@ -124,12 +171,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   fuzz::StringSerial serial;
   fuzz::StepClock clock;
   fuzz::BlobParamStore store;
-  hal::Board board{imu, uwb, can, serial, clock, store, site};
+  hal::Board board{imu, uwb, can, serial, clock, store, site, &gnss};
   auto app = std::make_unique<App>(board);
   if (!ok(app->init())) return 0;
   uint64_t last_t = kStartUs;
   for (const auto& s : imu.samples) last_t = s.t_us > last_t ? s.t_us : last_t;
   for (const auto& r : uwb.ranges) last_t = r.t_us > last_t ? r.t_us : last_t;
+  for (const auto& f : gnss.fixes) last_t = f.rx_t_us > last_t && f.rx_t_us < UINT64_MAX / 2 ? f.rx_t_us : last_t;
   uint64_t now = (kStartUs / kCyclePeriodUs) * kCyclePeriodUs;
   size_t valid = 0;
   for (size_t tick = 0; tick < kMaxTicks && now <= last_t + 200000; ++tick, now += kCyclePeriodUs) {
@@ -147,6 +195,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const auto& st = app->stats();
     std::fprintf(stderr, "fuzz_sequence: imu accepted %u rejected %u, uwb accepted %u rejected %u\n",
                  st.imu.accepted, st.imu.rejected_total(), st.uwb.accepted, st.uwb.rejected_total());
+    std::fprintf(stderr, "fuzz_sequence: gnss accepted %u rejected %u, fused %u\n", st.gnss.accepted,
+                 st.gnss.rejected_total(), app->navigator().diagnostics().gnss_used);
   }
   return 0;
 }

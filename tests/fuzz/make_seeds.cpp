@@ -74,9 +74,11 @@ Bytes can_seed(size_t n) {
 // `speed_mps` from (5, 15, 0) (heading 0, so an IMU at constant velocity reads
 // gravity only), IMU every 10 ms, a range every 25 ms (anchors 1..4 in turn).
 // Moving, the filter acquires its heading and reaches status valid.
-Bytes sequence_seed(bool with_imu, double seconds, double speed_mps) {
+// With `with_gnss` the antenna (1.2 m mast, 0.5 m ahead) sends a DGNSS fix
+// every 200 ms, 100 ms late, with velocity.
+Bytes sequence_seed(bool with_imu, double seconds, double speed_mps, bool with_gnss = false) {
   Bytes b;
-  b.push_back(with_imu ? 1 : 0);
+  b.push_back(static_cast<uint8_t>((with_imu ? 1 : 0) | (with_gnss ? 4 : 0)));
   const double ax[4] = {0, 30, 30, 0};
   const double ay[4] = {0, 0, 30, 30};
   const int steps = static_cast<int>(seconds * 1000.0);
@@ -93,6 +95,24 @@ Bytes sequence_seed(bool with_imu, double seconds, double speed_mps) {
       u16(b, 0);
       u16(b, 0);
       u16(b, 0);
+    }
+    if (with_gnss && ms % 200 == 100) {
+      b.push_back(static_cast<uint8_t>((since << 2) | 1));
+      since = 0;
+      b.push_back(193);  // GNSS fix with velocity
+      const double x = 5.0 + speed_mps * ms * 1e-3 + 0.5;
+      u16(b, static_cast<int>(std::lround(x * 100.0)));
+      u16(b, 1500);
+      u16(b, 120);
+      b.push_back(9);   // sigma_h 0.5 m
+      b.push_back(19);  // sigma_v 1.0 m
+      b.push_back(50);  // 100 ms latency
+      u16(b, static_cast<int>(std::lround(speed_mps * 100.0)));
+      u16(b, 0);
+      u16(b, 0);
+      b.push_back(9);   // 0.1 m/s
+      b.push_back(2);   // DGNSS
+      b.push_back(11);  // satellites
     }
     if (ms % 25 == 0) {
       b.push_back(static_cast<uint8_t>((since << 2) | 1));
@@ -128,6 +148,7 @@ int main(int argc, char** argv) {
   good = good && write(dir + "/fuzz_param_blob/first_at_max", Bytes(blob, blob + n));
   good = good && write(dir + "/fuzz_sequence/static_imu_uwb", sequence_seed(true, 6.0, 2.0));
   good = good && write(dir + "/fuzz_sequence/static_uwb_only", sequence_seed(false, 3.0, 0.0));
+  good = good && write(dir + "/fuzz_sequence/drive_imu_uwb_gnss", sequence_seed(true, 6.0, 2.0, true));
   if (!good) {
     std::fprintf(stderr, "fuzz_make_seeds: cannot write under %s (create the target folders)\n", dir.c_str());
     return 1;

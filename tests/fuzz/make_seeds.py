@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Writes the text seed corpora of the fuzz targets: one valid file per
 recording file type for fuzz_recording (first byte selects the type, 6 is
-uwb.csv.gz, 7 a site calibration file) and console sessions for fuzz_console.
+uwb.csv.gz, 7 a site calibration file, 8 gnss.csv) and console sessions for fuzz_console.
 Usage: tests/fuzz/make_seeds.py CORPUS_DIR"""
 import gzip
 import os
@@ -18,6 +18,9 @@ RECORDING = {
     5: "name = fuzz\nplatform = air\ngravity_mps2 = 9.81\nuwb_sigma_m = 0.1\nbad line\n",
     7: ("# uwbnav range calibration v1\nsite_sigma_m = 0.0159\nsite_crc32 = 0xaf12d0c8\nmethod = truth\n"
         "anchor_id,tag_id,offset_m,sigma_m\n3,0,0.0727,0.0159\n5,0,0.0388,0.0144\n"),
+    8: ("t_s,x_m,y_m,z_m,sx_m,sy_m,sz_m,fix,num_sv,latency_s,vx_mps,vy_mps,vz_mps,sv_mps\n"
+        "1.0,5,5,1.5,0.8,0.8,1.6,2,12,0.08,1.5,0,0,0.05\n1.2,,,,,,,0,0,,,,,\n"
+        "1.4,5.3,5,1.5,1.6,1.6,3.2,1,6,0.12,1.5,0.1,0,0.1\n1.6,5.6,5.1,1.4,0.8,0.8,1.6,2,11,,,,,\n"),
 }
 CONSOLE = [
     "help\r", "status\r\nstats\r\nanchors\r\n", "param list\rparam get gate.policy\rparam set gate.policy 2\r",

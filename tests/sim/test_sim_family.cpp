@@ -1,5 +1,5 @@
 // Scenario family: every cell draws valid, reproducible drives inside its
-// ranges (anchors, schedules, trolley, multicopter, outages, blockages).
+// ranges (anchors, schedules, trolley, multicopter, outages, blockages, GNSS road).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -29,7 +29,7 @@ TEST(SimFamily, CellListHasTheRequiredCells) {
     EXPECT_FALSE(c.description.empty()) << c.name;
   }
   for (const char* n : {"ground_los", "ground_nlos", "ground_hard", "ground_survey15", "ground_blocked",
-                        "ground_sparse", "air_indoor", "air_sparse", "trolley3", "outage"}) {
+                        "ground_sparse", "air_indoor", "air_sparse", "trolley3", "outage", "ground_gnss"}) {
     EXPECT_EQ(names.count(n), 1U) << n;
   }
 }
@@ -46,7 +46,8 @@ TEST(SimFamily, EveryCellDrawsValidScenariosWithinItsAnchorArea) {
       const SimOutput out = family(c.name, seed);
       ASSERT_FALSE(out.rec.uwb.empty()) << c.name;
       EXPECT_EQ(out.rec.meta.at("sim_family"), c.name + ":" + std::to_string(seed));
-      // The route stays within a turning circle of the anchors' bounding box.
+      // The route stays within a turning circle of the anchors' bounding box
+      // (ground_gnss: of the road, which runs up to 600 m past its anchors on purpose).
       double lo[2] = {1e9, 1e9};
       double hi[2] = {-1e9, -1e9};
       for (const AnchorDef& a : out.scenario.anchors) {
@@ -55,6 +56,7 @@ TEST(SimFamily, EveryCellDrawsValidScenariosWithinItsAnchorArea) {
           hi[i] = std::max(hi[i], a.pos_nav_m[i]);
         }
       }
+      if (c.name == "ground_gnss") hi[0] = std::max(hi[0], 600.0);
       for (const TruthState& t : out.truth) {
         for (int i = 0; i < 2; ++i) {
           ASSERT_GT(t.pos_nav_m[i], lo[i] - 12.0) << c.name << ":" << seed;
@@ -169,6 +171,109 @@ TEST(SimFamily, BlockedCellSilencesTwoOfFourAnchorsAtATimeOnALongDrive) {
   fast.fast = true;
   ASSERT_EQ(draw_family_scenario("ground_blocked", 1000, fast, sc, &err), Status::kOk) << err;
   EXPECT_LE(sc.duration_s, 150.0);
+}
+
+// The longest stretch without any range that ends before the drive does [s]
+// (the car came back into coverage), and its ends.
+double longest_closed_uwb_gap_s(const SimOutput& out, double& from_s, double& to_s) {
+  double prev_s = 0.0;
+  double longest = 0.0;
+  for (const auto& row : out.rec.uwb) {
+    const double t_s = static_cast<double>(row.range.t_us) * 1e-6;
+    if (t_s - prev_s > longest) {
+      longest = t_s - prev_s;
+      from_s = prev_s;
+      to_s = t_s;
+    }
+    prev_s = t_s;
+  }
+  return longest;
+}
+
+TEST(SimFamily, GnssCellLeavesUwbCoverageForAtLeast20sAndComesBackWhileFixesContinue) {
+  for (uint64_t seed : {1ULL, 2ULL, 3ULL, 1000ULL, 1001ULL}) {
+    for (bool fast : {true, false}) {
+      if (!fast && seed > 2) continue;  // full-length drives: two seeds keep the test short
+      const SimOutput out = family("ground_gnss", seed, fast);
+      double from_s = 0.0;
+      double to_s = 0.0;
+      const double gap_s = longest_closed_uwb_gap_s(out, from_s, to_s);
+      EXPECT_GE(gap_s, 20.0) << "ground_gnss:" << seed << (fast ? " fast" : "");
+      // GNSS goes on outside its blocked windows: every 5 Hz epoch of the gap
+      // that no blocked window covers has a fix.
+      double blocked_s = 0.0;
+      for (const GnssWindow& w : out.scenario.gnss.windows) {
+        if (w.kind != GnssWindowKind::kBlocked) continue;
+        blocked_s += std::max(0.0, std::min(to_s, w.end_s) - std::max(from_s, w.start_s));
+      }
+      size_t fixes = 0;
+      for (const GnssFix& f : out.rec.gnss) {
+        const double t_s = static_cast<double>(f.t_us) * 1e-6;
+        fixes += t_s > from_s && t_s < to_s ? 1U : 0U;
+      }
+      EXPECT_GE(static_cast<double>(fixes), 5.0 * (gap_s - blocked_s) - 2.0) << "ground_gnss:" << seed;
+      EXPECT_GT(fixes, 0U) << "ground_gnss:" << seed;
+    }
+  }
+}
+
+TEST(SimFamily, GnssCellDrawsARoadWithAnchorsAtOneEndAndGnssWithinItsRanges) {
+  for (uint64_t seed = 1; seed <= 8; ++seed) {
+    Scenario sc;
+    std::string err;
+    ASSERT_EQ(draw_family_scenario("ground_gnss", seed, FamilyOptions{}, sc, &err), Status::kOk) << err;
+    EXPECT_GE(sc.duration_s, 120.0);
+    EXPECT_LE(sc.duration_s, 300.0);
+    ASSERT_EQ(sc.anchors.size(), 4U);
+    for (const AnchorDef& a : sc.anchors) {
+      EXPECT_GE(a.pos_nav_m[0], -0.5) << seed;
+      EXPECT_LE(a.pos_nav_m[0], 80.5) << "anchors only along the first 50-80 m: " << seed;
+    }
+    EXPECT_GE(sc.uwb.max_range_m, 60.0);
+    EXPECT_LE(sc.uwb.max_range_m, 100.0);
+    const GnssConfig& g = sc.gnss;
+    EXPECT_TRUE(g.enabled);
+    EXPECT_EQ(g.rate_hz, 5.0);
+    EXPECT_GE(g.latency_ms, 50.0);
+    EXPECT_LE(g.latency_ms, 150.0);
+    EXPECT_LE(g.latency_jitter_ms, 20.0);
+    EXPECT_GE(g.sigma_h_m, 0.3);
+    EXPECT_LE(g.sigma_h_m, 1.5);
+    EXPECT_GE(g.claim_ratio, 0.7);
+    EXPECT_LE(g.claim_ratio, 1.5);
+    EXPECT_GE(g.lever_body_m[0], 0.0);
+    EXPECT_LE(g.lever_body_m[0], 1.5);
+    EXPECT_GE(g.lever_body_m[2], 1.0);
+    EXPECT_LE(g.lever_body_m[2], 1.8);
+    size_t blocked = 0;
+    size_t multipath = 0;
+    for (size_t i = 0; i < g.windows.size(); ++i) {
+      const GnssWindow& w = g.windows[i];
+      const double len = w.end_s - w.start_s;
+      if (w.kind == GnssWindowKind::kBlocked) {
+        ++blocked;
+        EXPECT_GE(len, 5.0 - 1e-9);
+        EXPECT_LE(len, 20.0 + 1e-9);
+      } else {
+        ++multipath;
+        EXPECT_GE(len, 5.0 - 1e-9);
+        EXPECT_LE(len, 30.0 + 1e-9);
+      }
+      EXPECT_GE(w.start_s, 20.0);
+      EXPECT_LE(w.end_s, sc.duration_s - 5.0 + 1e-9);
+      if (i > 0) {
+        EXPECT_GE(w.start_s, g.windows[i - 1].end_s + 1.0 - 1e-9) << "windows apart: " << seed;
+      }
+    }
+    EXPECT_GE(blocked, 1U);
+    EXPECT_LE(blocked, 3U);
+    EXPECT_GE(multipath, 1U);
+    EXPECT_LE(multipath, 3U);
+    FamilyOptions fast;
+    fast.fast = true;
+    ASSERT_EQ(draw_family_scenario("ground_gnss", seed, fast, sc, &err), Status::kOk) << err;
+    EXPECT_LE(sc.duration_s, 150.0);
+  }
 }
 
 TEST(SimFamily, FamilySpecParsesCellAndSeed) {

@@ -85,6 +85,13 @@ int replay_and_report(const std::string& dir, const std::string& out, const Args
   }
   out_dir.keep();
   eval::print_summary(stdout, table);
+  if (!rec.gnss.empty()) {
+    // What became of the receiver's fixes (docs/ekf.md "GNSS"; per reason: console `stats gnss`).
+    std::printf("gnss: %zu fixes in gnss.csv, %llu fused, %llu refused by the estimator, %lu refused by input validation\n",
+                rec.gnss.size(), static_cast<unsigned long long>(result.gnss_fused),
+                static_cast<unsigned long long>(result.gnss_rejected),
+                static_cast<unsigned long>(result.stats.gnss.rejected_total()));
+  }
   std::printf("outputs: %s/{estimates.csv, ranges.csv, can.log}\n", out.c_str());
   int rc = 0;
   if (result.solution_epochs == 0) {

@@ -57,6 +57,7 @@ Status read_recording(const std::string& dir, Recording& out, ReadReport& report
   if (!ok(st)) return st;
   out.meta = std::move(stream.meta);
   out.site = stream.site;
+  out.gnss = std::move(stream.gnss);
   st = drain(stream.uwb, out.uwb, report);
   if (ok(st)) st = drain(stream.imu, out.imu, report);
   if (ok(st)) st = drain(stream.truth, out.truth, report);

@@ -4,6 +4,7 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <system_error>
@@ -16,6 +17,9 @@ namespace {
 
 constexpr uint64_t kMaxAnchorId = 0xFFFF;  // UwbRange::anchor_id is uint16_t
 constexpr uint64_t kMaxTagId = 0xFF;       // UwbRange::tag_id is uint8_t
+constexpr uint64_t kMaxNumSv = 0xFF;       // GnssFix::num_sv is uint8_t
+constexpr double kMaxGnssLatencyS = 60.0;  // gnss.csv latency_s accepted up to [s]
+constexpr double kMaxGnssLeverM = 100.0;   // meta.ini gnss_lever_m, per axis [m]
 
 std::string trimmed(const std::string& s) {
   size_t b = 0;
@@ -33,6 +37,25 @@ bool parse_meta_number(const std::string& s, double& out) {
   const auto r = std::from_chars(b, e, v, std::chars_format::general);
   if (r.ec != std::errc() || r.ptr != e || !std::isfinite(v)) return false;
   out = v;
+  return true;
+}
+
+// "x,y,z" or "x y z" (commas and/or blanks between three finite numbers).
+bool parse_meta_vec3(const std::string& s, double max_abs, Vec3f& out) {
+  double v[3] = {0, 0, 0};
+  size_t n = 0;
+  size_t i = 0;
+  while (i < s.size()) {
+    while (i < s.size() && (s[i] == ',' || s[i] == ' ' || s[i] == '\t')) ++i;
+    if (i >= s.size()) break;
+    size_t e = i;
+    while (e < s.size() && s[e] != ',' && s[e] != ' ' && s[e] != '\t') ++e;
+    if (n == 3 || !parse_meta_number(s.substr(i, e - i), v[n]) || std::fabs(v[n]) > max_abs) return false;
+    ++n;
+    i = e;
+  }
+  if (n != 3) return false;
+  out = Vec3f{static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2])};
   return true;
 }
 
@@ -82,6 +105,13 @@ Status read_meta(const std::string& dir, std::map<std::string, std::string>& met
         continue;
       }
       site.gravity_mps2 = static_cast<float>(v);
+    } else if (key == "gnss_lever_m") {
+      if (!parse_meta_vec3(value, kMaxGnssLeverM, site.gnss_lever_body_m)) {
+        csv::warn(report, "meta.ini", line_no,
+                  "gnss_lever_m " + csv::quote(value.data(), value.size()) +
+                      " is not three numbers x,y,z in [-100, 100] m; ignored");
+        continue;
+      }
     } else if (key == "uwb_sigma_m") {
       if (!parse_meta_number(value, v) || v <= 0.0 || v > 100.0) {
         csv::warn(report, "meta.ini", line_no,
@@ -216,6 +246,72 @@ bool parse_row(csv::Table& t, TruthRow& row, std::string& reason) {
   return true;
 }
 
+bool parse_row(csv::Table& t, GnssFix& fix, std::string& reason) {
+  fix = GnssFix{};
+  if (!t.parse_time(0, fix.t_us)) return false;
+  uint64_t quality = static_cast<uint64_t>(GnssFixType::kSingle);  // absent or empty: single
+  if (!t.empty(7)) {
+    if (!t.parse_uint(7, 0xFF, quality)) return false;
+    if (quality != 0 && quality != 1 && quality != 2 && quality != 4 && quality != 5) {
+      reason = "fix: unknown GGA quality code " + std::to_string(quality) +
+               " (0 none, 1 single, 2 dgnss, 4 rtk fixed, 5 rtk float)";
+      return false;
+    }
+  }
+  fix.fix = static_cast<GnssFixType>(quality);
+  fix.rx_t_us = fix.t_us;
+  if (fix.fix == GnssFixType::kNone) {  // the receiver's "no fix": the other cells carry nothing
+    t.accept_time(fix.t_us);
+    return true;
+  }
+  float* const pos[3] = {&fix.pos_nav_m.x, &fix.pos_nav_m.y, &fix.pos_nav_m.z};
+  float* const sigma[3] = {&fix.pos_sigma_m.x, &fix.pos_sigma_m.y, &fix.pos_sigma_m.z};
+  for (size_t i = 0; i < 3; ++i) {
+    if (!t.parse_float(1 + i, *pos[i])) return false;
+  }
+  for (size_t i = 0; i < 3; ++i) {
+    if (!t.parse_float(4 + i, *sigma[i])) return false;
+    if (!(*sigma[i] > 0.0F)) {
+      reason = std::string(tables::kGnss.required[4 + i]) + ": must be > 0";
+      return false;
+    }
+  }
+  uint64_t num_sv = 0;
+  if (!t.empty(8) && !t.parse_uint(8, kMaxNumSv, num_sv)) return false;
+  fix.num_sv = static_cast<uint8_t>(num_sv);
+  if (!t.empty(9)) {
+    double latency_s = 0.0;
+    if (!t.parse_double(9, latency_s)) return false;
+    if (latency_s < 0.0) {
+      reason = "latency_s: negative (the fix cannot arrive before its time of validity)";
+      return false;
+    }
+    if (latency_s > kMaxGnssLatencyS) {
+      reason = "latency_s: above 60 s";
+      return false;
+    }
+    fix.rx_t_us = fix.t_us + seconds_to_us(latency_s);
+  }
+  size_t vel_cells = 0;
+  for (size_t i = 10; i < 13; ++i) vel_cells += t.empty(i) ? 0U : 1U;
+  if (vel_cells == 3) {
+    if (!t.parse_float(10, fix.vel_nav_mps.x) || !t.parse_float(11, fix.vel_nav_mps.y) ||
+        !t.parse_float(12, fix.vel_nav_mps.z)) {
+      return false;
+    }
+  } else if (vel_cells != 0) {
+    reason = "velocity partly empty (give all of vx_mps,vy_mps,vz_mps or none)";
+    return false;
+  }
+  if (!t.parse_float_or_nan(13, fix.vel_sigma_mps)) return false;
+  if (std::isfinite(fix.vel_sigma_mps) && !(fix.vel_sigma_mps > 0.0F)) {
+    reason = "sv_mps: must be > 0";
+    return false;
+  }
+  t.accept_time(fix.t_us);
+  return true;
+}
+
 template <typename Row>
 Status RowStream<Row>::open(const std::string& dir, const char* file, const csv::Columns& cols, bool required,
                             ReadReport& report) {
@@ -333,10 +429,27 @@ Status read_site(const std::string& dir, std::map<std::string, std::string>& met
   return Status::kOk;
 }
 
+Status read_gnss(const std::string& dir, std::vector<GnssFix>& out, ReadReport& report) {
+  out.clear();
+  bool present = false;
+  const Status st = read_small_table(dir, "gnss.csv", tables::kGnss, false, report, present,
+                                     [&](csv::Table& t, std::string& reason) {
+                                       GnssFix fix;
+                                       if (!parse_row(t, fix, reason)) return false;
+                                       if (fix.fix != GnssFixType::kNone) out.push_back(fix);
+                                       return true;
+                                     });
+  // The file is in time-of-validity order; consumers take fixes as they arrive.
+  std::stable_sort(out.begin(), out.end(),
+                   [](const GnssFix& a, const GnssFix& b) { return a.rx_t_us < b.rx_t_us; });
+  return st;
+}
+
 Status RecordingStream::open(const std::string& directory, ReadReport& report, bool with_truth) {
   dir = directory;
   meta.clear();
   site = SiteConfig{};
+  gnss.clear();
   Status st = read_site(dir, meta, site, report);
   if (!ok(st)) return st;
   st = uwb.open(dir, "uwb.csv", tables::kUwb, true, report);
@@ -344,6 +457,8 @@ Status RecordingStream::open(const std::string& directory, ReadReport& report, b
   st = imu.open(dir, "imu.csv", tables::kImu, false, report);
   if (!ok(st)) return st;
   site.has_imu = imu.peek() != nullptr;
+  st = read_gnss(dir, gnss, report);
+  if (!ok(st)) return st;
   if (with_truth) st = truth.open(dir, "truth.csv", tables::kTruth, false, report);
   return st;
 }

@@ -1,8 +1,9 @@
 // Streaming reader of a format v1 recording (docs/dataset-format.md): the
-// small tables (meta.ini, anchors.csv, tags.csv) are read whole when the
-// recording is opened; uwb.csv, imu.csv and truth.csv (or their .csv.gz) are
-// walked one row at a time with one row of look-ahead, so the memory held does
-// not depend on the recording's length. read_recording() is built on it: both
+// small tables (meta.ini, anchors.csv, tags.csv and the optional gnss.csv, a
+// few fixes per second) are read whole when the recording is opened; uwb.csv,
+// imu.csv and truth.csv (or their .csv.gz) are walked one row at a time with
+// one row of look-ahead, so the memory they hold does not depend on the
+// recording's length. read_recording() is built on it: both
 // share the row parsers and the validation (bad rows skipped with "file:line: reason").
 #pragma once
 
@@ -24,6 +25,9 @@ namespace uwbnav::dataset {
 bool parse_row(csv::Table& t, UwbRow& out, std::string& reason);
 bool parse_row(csv::Table& t, ImuSample& out, std::string& reason);
 bool parse_row(csv::Table& t, TruthRow& out, std::string& reason);
+// gnss.csv: a fix-0 ("no fix") row is a good row with out.fix == kNone and no
+// position; read_gnss() counts it as read but keeps it out of its output.
+bool parse_row(csv::Table& t, GnssFix& out, std::string& reason);
 
 inline uint64_t row_time_us(const UwbRow& r) { return r.range.t_us; }
 inline uint64_t row_time_us(const ImuSample& s) { return s.t_us; }
@@ -105,8 +109,8 @@ class RowStream final : public RowFeed<Row> {
 // One recording opened for streaming.
 class RecordingStream {
  public:
-  // Reads meta.ini, anchors.csv, tags.csv and opens uwb.csv, imu.csv and
-  // (when `with_truth`) truth.csv. Fails as read_recording does for a missing
+  // Reads meta.ini, anchors.csv, tags.csv and gnss.csv and opens uwb.csv,
+  // imu.csv and (when `with_truth`) truth.csv. Fails as read_recording does for a missing
   // directory or required file, a wrong header or no usable anchor; warnings
   // go to `report`, which must outlive the stream (rows read later add theirs).
   [[nodiscard]] Status open(const std::string& dir, ReadReport& report, bool with_truth = true);
@@ -121,7 +125,14 @@ class RecordingStream {
   RowStream<UwbRow> uwb;
   RowStream<ImuSample> imu;
   RowStream<TruthRow> truth;
+  std::vector<GnssFix> gnss;  // gnss.csv read whole at open, in arrival (rx_t_us) order; empty when absent
 };
+
+// Reads the optional gnss.csv (or gnss.csv.gz) of `dir` whole: good rows with a
+// fix, stably sorted by rx_t_us; bad rows skipped with a "gnss.csv:line: reason"
+// warning. kOk with `out` empty when the file is absent. Fails (report.error)
+// on a wrong header or a read error, as for imu.csv.
+[[nodiscard]] Status read_gnss(const std::string& dir, std::vector<GnssFix>& out, ReadReport& report);
 
 // Reads meta.ini, anchors.csv and tags.csv of `dir` into `meta` and `site`
 // (the part of a recording read whole). Fails as read_recording does.

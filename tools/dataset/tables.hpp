@@ -13,6 +13,9 @@ inline const csv::Columns kUwb{{"t_s", "anchor_id", "range_m"},
 inline const csv::Columns kImu{
     {"t_s", "ax_mps2", "ay_mps2", "az_mps2", "gx_radps", "gy_radps", "gz_radps"}, {}};
 inline const csv::Columns kTruth{{"t_s", "x_m", "y_m", "z_m"}, {"qw", "qx", "qy", "qz"}, true};
+// gnss.csv: an extension of format v1 (docs/dataset-format.md "gnss.csv"); older readers ignore the file.
+inline const csv::Columns kGnss{{"t_s", "x_m", "y_m", "z_m", "sx_m", "sy_m", "sz_m"},
+                                {"fix", "num_sv", "latency_s", "vx_mps", "vy_mps", "vz_mps", "sv_mps"}};
 inline const csv::Columns kEstimates{{"t_s", "x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps", "qw",
                                       "qx", "qy", "qz", "sx_m", "sy_m", "sz_m", "status"},
                                      {}};

@@ -1,5 +1,5 @@
-// Format v1 writers (recording directory, estimates.csv, ranges.csv) and the
-// readers of the replay outputs (docs/dataset-format.md).
+// Format v1 writers (recording directory incl. the gnss.csv extension,
+// estimates.csv, ranges.csv) and the readers of the replay outputs (docs/dataset-format.md).
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -67,12 +67,16 @@ Status write_meta(const std::string& path, const Recording& rec) {
   if (f == nullptr) return Status::kIoError;
   std::string text = "# format v1 recording (docs/dataset-format.md)\n";
   for (const auto& kv : rec.meta) {
-    if (kv.first == "platform" || kv.first == "gravity_mps2") continue;
+    if (kv.first == "platform" || kv.first == "gravity_mps2" || kv.first == "gnss_lever_m") continue;
     text += meta_line(kv.first, kv.second);
   }
   // The site configuration is authoritative for the keys it carries.
   text += meta_line("platform", rec.site.platform == Platform::kAir ? "air" : "ground");
   text += meta_line("gravity_mps2", float_text(rec.site.gravity_mps2));
+  const Vec3f& lever = rec.site.gnss_lever_body_m;
+  if (!rec.gnss.empty() || lever.x != 0.0F || lever.y != 0.0F || lever.z != 0.0F) {
+    text += meta_line("gnss_lever_m", float_text(lever.x) + "," + float_text(lever.y) + "," + float_text(lever.z));
+  }
   const bool good = std::fwrite(text.data(), 1, text.size(), f) == text.size();
   return finish(f, good);
 }
@@ -81,6 +85,41 @@ Status write_meta(const std::string& path, const Recording& rec) {
 void remove_stale(const std::string& path) {
   std::error_code ec;
   std::filesystem::remove(path, ec);
+}
+
+bool has_velocity(const GnssFix& f) {
+  return std::isfinite(f.vel_nav_mps.x) && std::isfinite(f.vel_nav_mps.y) && std::isfinite(f.vel_nav_mps.z);
+}
+
+// gnss.csv in time-of-validity order (the file's order; `fixes` are in arrival
+// order), optional columns up to the last one any fix has a value for.
+Status write_gnss(const std::string& path, const std::vector<GnssFix>& fixes) {
+  std::vector<const GnssFix*> rows;
+  rows.reserve(fixes.size());
+  size_t optional = 0;
+  for (const GnssFix& f : fixes) {
+    rows.push_back(&f);
+    if (f.fix != GnssFixType::kSingle) optional = std::max<size_t>(optional, 1);
+    if (f.num_sv != 0) optional = std::max<size_t>(optional, 2);
+    if (f.rx_t_us != f.t_us) optional = std::max<size_t>(optional, 3);
+    if (has_velocity(f)) optional = std::max<size_t>(optional, 6);
+    if (std::isfinite(f.vel_sigma_mps)) optional = 7;
+  }
+  std::stable_sort(rows.begin(), rows.end(), [](const GnssFix* a, const GnssFix* b) { return a->t_us < b->t_us; });
+  return write_table(path, tables::kGnss, optional, rows.size(), [&](size_t i, csv::LineBuilder& l) {
+    const GnssFix& f = *rows[i];
+    l.time(f.t_us).sep().f32(f.pos_nav_m.x).sep().f32(f.pos_nav_m.y).sep().f32(f.pos_nav_m.z);
+    l.sep().f32(f.pos_sigma_m.x).sep().f32(f.pos_sigma_m.y).sep().f32(f.pos_sigma_m.z);
+    if (optional >= 1) l.sep().u64(static_cast<uint64_t>(f.fix));
+    if (optional >= 2) l.sep().u64(f.num_sv);
+    if (optional >= 3) l.sep().time(f.rx_t_us >= f.t_us ? f.rx_t_us - f.t_us : 0);  // rx before t: written as 0
+    if (optional >= 6 && has_velocity(f)) {
+      l.sep().f32(f.vel_nav_mps.x).sep().f32(f.vel_nav_mps.y).sep().f32(f.vel_nav_mps.z);
+    } else if (optional >= 6) {
+      l.sep().sep().sep();  // not reported (all three empty: the reader refuses a partial velocity)
+    }
+    if (optional >= 7) l.sep().f32(f.vel_sigma_mps);
+  });
 }
 
 template <typename Row, typename RowFn>
@@ -204,6 +243,13 @@ Status write_recording(const std::string& dir, const Recording& rec) {
     if (st != Status::kOk) return st;
   } else {
     remove_stale(dir + "/truth.csv");
+  }
+
+  if (!rec.gnss.empty()) {
+    st = write_gnss(dir + "/gnss.csv", rec.gnss);
+    if (st != Status::kOk) return st;
+  } else {
+    remove_stale(dir + "/gnss.csv");
   }
 
   return write_meta(dir + "/meta.ini", rec);

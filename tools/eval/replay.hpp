@@ -48,6 +48,8 @@ struct ReplayResult {
   uint64_t can_frames = 0;                    // frames the firmware sent
   uint64_t epochs = 0;                        // output epochs
   uint64_t solution_epochs = 0;               // epochs carrying a position (status valid or degraded)
+  uint64_t gnss_fused = 0;                    // GNSS fixes the estimator fused
+  uint64_t gnss_rejected = 0;                 // GNSS fixes it refused (any GnssVerdict but fused)
   std::vector<dataset::EstimateRow> estimates;
   std::vector<RangeReport> ranges;
 };

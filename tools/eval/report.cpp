@@ -141,7 +141,7 @@ MethodResult run_imu_only(const dataset::Recording& rec) {
   hal::MemCanBus bus;
   hal::NullSerialPort serial;
   hal::EmptyParamStore store;
-  hal::Board board{sources.imu, uwb, bus, serial, clock, store, rec.site};
+  hal::Board board{sources.imu, uwb, bus, serial, clock, store, rec.site, sources.gnss_or_null(rec)};
   App app(board);
   if (!ok(app.init())) return m;
   std::vector<dataset::EstimateRow> est;

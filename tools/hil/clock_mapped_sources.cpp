@@ -21,4 +21,16 @@ Status ClockMappedUwbSource::poll(uint64_t up_to_us, UwbRange& out) {
   return s;
 }
 
+Status ClockMappedGnssSource::poll(uint64_t up_to_us, GnssFix& out) {
+  if (inner_.finished()) return Status::kEmpty;
+  const uint64_t rx_clock_us = map_.to_clock_us(inner_.next_rx_t_us());
+  if (rx_clock_us > up_to_us) return Status::kEmpty;
+  const Status s = inner_.poll(UINT64_MAX, out);
+  if (ok(s)) {
+    out.t_us = map_.to_clock_us(out.t_us);
+    out.rx_t_us = rx_clock_us;
+  }
+  return s;
+}
+
 }  // namespace uwbnav::hil

@@ -1,4 +1,4 @@
-// Replay sources for a real-time host firmware: the recording's IMU and UWB
+// Replay sources for a real-time host firmware: the recording's IMU, UWB and GNSS
 // streams (hal::ReplaySources) with sensor time mapped onto the board clock,
 // so samples become due when the wall clock reaches them (t_clock = map(t_rec)).
 #pragma once
@@ -30,6 +30,18 @@ class ClockMappedUwbSource final : public hal::UwbSource {
 
  private:
   hal::ReplayUwbSource& inner_;
+  TimeMap map_;
+};
+
+// GNSS fixes: validity and arrival both mapped; due when the arrival's clock time is reached.
+class ClockMappedGnssSource final : public hal::GnssSource {
+ public:
+  ClockMappedGnssSource(hal::ReplayGnssSource& inner, const TimeMap& map) : inner_(inner), map_(map) {}
+  [[nodiscard]] Status poll(uint64_t up_to_us, GnssFix& out) override;
+  bool finished() const override { return inner_.finished(); }
+
+ private:
+  hal::ReplayGnssSource& inner_;
   TimeMap map_;
 };
 

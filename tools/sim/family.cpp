@@ -1,6 +1,6 @@
 // Scenario family (see family.hpp): per cell the ranges every drive is drawn
 // from, a route planner for random ground drives (lots, roads, trolleys) and
-// multicopter flights, random anchor layouts, obstacles and error models.
+// multicopter flights, random anchor layouts, obstacles, error models and GNSS.
 #include "tools/sim/family.hpp"
 
 #include <algorithm>
@@ -29,7 +29,8 @@ double draw_log(Rng& r, Span s) {
 }
 int draw_int(Rng& r, int lo, int hi) { return hi > lo ? lo + static_cast<int>(r.below(static_cast<uint64_t>(hi - lo + 1))) : lo; }
 
-enum class CellKind : uint8_t { kGround, kAir, kTrolley, kOutage };
+// kGnss: a long road with anchors at one end only, GNSS throughout (ground_gnss).
+enum class CellKind : uint8_t { kGround, kAir, kTrolley, kOutage, kGnss };
 
 // IMU grades as bits, in the order of imu_grade_names().
 constexpr unsigned kConsumer = 1U;
@@ -225,6 +226,20 @@ std::vector<CellSpec> make_specs() {
     c.road_prob = 0.35;
     c.grades = kConsumer | kMems | kAutomotive;
     c.vibration_mps2 = {0.05, 0.3};
+    v.push_back(c);
+  }
+  {
+    CellSpec c;
+    c.name = "ground_gnss";
+    c.description = "350-600 m road, 4 anchors along its first 50-80 m only (UWB range 60-100 m): out of coverage >= 20 s and back; GNSS throughout with blocked and multipath windows, latency, lever arm";
+    c.kind = CellKind::kGnss;
+    c.duration_s = {120, 300};
+    c.rate_hz = {10, 30};
+    c.episode_share = {0, 0.1};
+    c.body_block_prob = 0.5;
+    c.outlier_prob = {0, 0.005};
+    c.speed_mps = {10, 15};
+    c.road_prob = 1.0;
     v.push_back(c);
   }
   return v;
@@ -554,6 +569,58 @@ std::string fmt(double v) {
   return buf;
 }
 
+// GNSS windows of one kind: n windows of U[len.lo, len.hi] s (rounded to 0.1 s)
+// at random places in [20 s, duration - 5 s), at least 1 s from every window
+// placed so far; a window that finds no room in 50 tries is left out.
+void place_gnss_windows(Rng& r, GnssWindowKind kind, int n, Span len, double duration_s,
+                        std::vector<GnssWindow>& windows) {
+  for (int i = 0; i < n; ++i) {
+    const double l = std::round(draw(r, len) * 10.0) / 10.0;
+    for (int tries = 0; tries < 50; ++tries) {
+      const double t0 = std::round(r.uniform(20.0, std::max(20.0, duration_s - 5.0 - l)) * 10.0) / 10.0;
+      bool clear = t0 + l <= duration_s - 5.0;
+      for (const GnssWindow& w : windows) clear = clear && (t0 + l + 1.0 <= w.start_s || t0 >= w.end_s + 1.0);
+      if (!clear) continue;
+      windows.push_back(GnssWindow{kind, t0, t0 + l});
+      break;
+    }
+  }
+  std::sort(windows.begin(), windows.end(),
+            [](const GnssWindow& a, const GnssWindow& b) { return a.start_s < b.start_s; });
+}
+
+// ground_gnss: UWB coverage limit and a DGNSS-like receiver with drawn errors,
+// misreported sigmas, latency, lever arm, 1-3 blocked and 1-3 multipath windows.
+void draw_gnss(Rng& r, double duration_s, Scenario& s) {
+  s.uwb.max_range_m = std::round(r.uniform(60.0, 100.0));
+  GnssConfig& g = s.gnss;
+  g.enabled = true;
+  g.rate_hz = 5.0;
+  g.latency_ms = std::round(r.uniform(50.0, 150.0));
+  g.latency_jitter_ms = std::round(r.uniform(5.0, 20.0));
+  g.lever_body_m[0] = r.uniform(0.0, 1.5);
+  g.lever_body_m[1] = r.uniform(-0.2, 0.2);
+  g.lever_body_m[2] = r.uniform(1.0, 1.8);
+  g.sigma_h_m = r.uniform(0.3, 1.5);
+  g.sigma_v_m = g.sigma_h_m * r.uniform(1.3, 2.0);
+  g.tau_s = r.uniform(20.0, 60.0);
+  g.sigma_white_m = r.uniform(0.05, 0.15);
+  g.claim_ratio = r.uniform(0.7, 1.5);
+  g.vel_sigma_mps = r.uniform(0.03, 0.1);
+  g.num_sv = static_cast<unsigned>(draw_int(r, 9, 16));
+  g.multipath_bias_m = r.uniform(2.0, 8.0);
+  g.multipath_turn_dps = r.uniform(2.0, 10.0);
+  g.multipath_claim_factor = 2.0;
+  g.windows.clear();
+  const int n_blocked = draw_int(r, 1, 3);
+  const int n_multipath = draw_int(r, 1, 3);
+  // One of each first, so that both kinds find room in a short drive.
+  place_gnss_windows(r, GnssWindowKind::kBlocked, 1, Span{5.0, 20.0}, duration_s, g.windows);
+  place_gnss_windows(r, GnssWindowKind::kMultipath, 1, Span{5.0, 30.0}, duration_s, g.windows);
+  place_gnss_windows(r, GnssWindowKind::kBlocked, n_blocked - 1, Span{5.0, 20.0}, duration_s, g.windows);
+  place_gnss_windows(r, GnssWindowKind::kMultipath, n_multipath - 1, Span{5.0, 30.0}, duration_s, g.windows);
+}
+
 void draw_scenario(const CellSpec& c, uint64_t seed, const FamilyOptions& opt, Scenario& s) {
   Rng r(mix_seed(name_hash(c.name), seed, 0x46414D49ULL));  // "FAMI"
   s = Scenario{};
@@ -568,13 +635,17 @@ void draw_scenario(const CellSpec& c, uint64_t seed, const FamilyOptions& opt, S
     road = u < 0.35;
   } else if (kind == CellKind::kGround) {
     road = r.uniform() < c.road_prob;
+  } else if (kind == CellKind::kGnss) {
+    road = true;
   }
   const bool air = kind == CellKind::kAir;
   const bool trolley = kind == CellKind::kTrolley;
 
   double duration = std::round(draw(r, c.duration_s));
   if (opt.fast) {
-    const double cap = c.block_anchors > 0 ? 150.0 : c.kind == CellKind::kOutage ? 100.0 : 60.0;
+    const double cap = c.block_anchors > 0 || c.kind == CellKind::kGnss ? 150.0
+                       : c.kind == CellKind::kOutage                   ? 100.0
+                                                                       : 60.0;
     duration = std::min(duration, cap);
   }
   s.duration_s = duration;
@@ -599,6 +670,19 @@ void draw_scenario(const CellSpec& c, uint64_t seed, const FamilyOptions& opt, S
     s.vehicle.roll_gain_deg_per_mps2 = 0.0;
     s.vehicle.pitch_gain_deg_per_mps2 = 0.0;
     plan_ground(r, area, draw(r, c.speed_mps), duration, false, true, s.route);
+  } else if (kind == CellKind::kGnss) {
+    // Out and back on a road long enough to leave the anchors' coverage for
+    // >= 20 s at cruise speed, short enough to come back before the end: one
+    // round trip within 90 % of the time left after parking, turns and stops.
+    const double v_cruise = draw(r, c.speed_mps);
+    const double len_max = std::min(600.0, 16.0 + 0.45 * v_cruise * (duration - 39.0));
+    area = Area{0.0, 0.0, r.uniform(350.0, std::max(350.0, len_max)), r.uniform(15.0, 25.0)};
+    const Area zone{0.0, 0.0, r.uniform(50.0, 80.0), area.h()};
+    const double base_h = draw(r, c.anchor_height_m);
+    const double spread = draw(r, c.anchor_spread_m);
+    place_road_anchors(r, n_anchors, zone, r.uniform(1.0, 5.0), base_h, spread, s.anchors);
+    s.tags.push_back(TagDef{0, {r.uniform(0.0, 1.0), 0.0, r.uniform(1.4, 2.0)}});
+    plan_ground(r, area, v_cruise, duration, true, false, s.route);
   } else {
     area = road ? Area{0.0, 0.0, r.uniform(150.0, 300.0), r.uniform(15.0, 25.0)}
                 : Area{0.0, 0.0, r.uniform(30.0, 120.0), r.uniform(20.0, 60.0)};
@@ -679,6 +763,8 @@ void draw_scenario(const CellSpec& c, uint64_t seed, const FamilyOptions& opt, S
   nl.episode_bias_mean_m = draw(r, c.episode_bias_m);
   nl.episode_bias_law = r.uniform() < 0.5 ? RandomLaw::kExponential : RandomLaw::kLogNormal;
 
+  if (c.kind == CellKind::kGnss) draw_gnss(r, duration, s);
+
   s.description = std::string(c.name) + " seed " + std::to_string(seed) + ": " + (air ? "multicopter" : trolley ? "trolley" : road ? "road" : "lot") +
                   " " + fmt(area.w()) + "x" + fmt(area.h()) + " m, " + std::to_string(n_anchors) + " anchors, " +
                   fmt(u.rate_hz) + (u.schedule == UwbSchedule::kRoundRobin ? " Hz total" : u.schedule == UwbSchedule::kFrame ? " Hz frames" : " Hz per anchor") +
@@ -686,6 +772,14 @@ void draw_scenario(const CellSpec& c, uint64_t seed, const FamilyOptions& opt, S
                   (nl.body_block ? ", body NLOS" : "") + ", " + std::to_string(nl.boxes.size()) + " boxes, " +
                   (s.imu.enabled ? "IMU " + fmt(s.imu.accel_noise_ug_per_sqrt_hz) + " ug/rtHz" : std::string("no IMU")) +
                   ", " + std::to_string(u.outages.size()) + " outages";
+  if (s.gnss.enabled) {
+    size_t blocked = 0;
+    for (const GnssWindow& w : s.gnss.windows) blocked += w.kind == GnssWindowKind::kBlocked ? 1U : 0U;
+    s.description += ", UWB range " + fmt(u.max_range_m) + " m, GNSS sigma " + fmt(s.gnss.sigma_h_m) +
+                     " m (claimed x" + fmt(s.gnss.claim_ratio) + "), latency " + fmt(s.gnss.latency_ms) + " ms, " +
+                     std::to_string(blocked) + " blocked + " + std::to_string(s.gnss.windows.size() - blocked) +
+                     " multipath windows";
+  }
   snap_to_recording_precision(s);
 }
 

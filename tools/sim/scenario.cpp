@@ -307,6 +307,54 @@ const std::map<std::string, Setter>& setters() {
     m["uwb.block_max_s"] = real([](Scenario& s) -> double& { return s.uwb.block_max_s; }, 0.01, 1e6);
     m["uwb.block_gap_min_s"] = real([](Scenario& s) -> double& { return s.uwb.block_gap_min_s; }, 0, 1e6);
     m["uwb.block_gap_max_s"] = real([](Scenario& s) -> double& { return s.uwb.block_gap_max_s; }, 0, 1e6);
+    m["uwb.max_range_m"] = real([](Scenario& s) -> double& { return s.uwb.max_range_m; }, 0, 1e6);
+    // [gnss]
+    m["gnss.enabled"] = flag([](Scenario& s) -> bool& { return s.gnss.enabled; });
+    m["gnss.rate_hz"] = real([](Scenario& s) -> double& { return s.gnss.rate_hz; }, 0.1, 100);
+    m["gnss.latency_ms"] = real([](Scenario& s) -> double& { return s.gnss.latency_ms; }, 0, 10000);
+    m["gnss.latency_jitter_ms"] = real([](Scenario& s) -> double& { return s.gnss.latency_jitter_ms; }, 0, 10000);
+    m["gnss.lever_m"] = [](Scenario& s, const std::string& v, std::string* why) {
+      double x[3] = {0, 0, 0};
+      if (!parse_numbers(v, 3, x, why)) return false;
+      for (int i = 0; i < 3; ++i) {
+        if (std::fabs(x[i]) > 100.0) {
+          *why = "lever arm must be within [-100, 100] m per axis";
+          return false;
+        }
+        s.gnss.lever_body_m[i] = x[i];
+      }
+      return true;
+    };
+    m["gnss.sigma_h_m"] = real([](Scenario& s) -> double& { return s.gnss.sigma_h_m; }, 0, 100);
+    m["gnss.sigma_v_m"] = real([](Scenario& s) -> double& { return s.gnss.sigma_v_m; }, 0, 100);
+    m["gnss.tau_s"] = real([](Scenario& s) -> double& { return s.gnss.tau_s; }, 0.1, 1e5);
+    m["gnss.sigma_white_m"] = real([](Scenario& s) -> double& { return s.gnss.sigma_white_m; }, 0, 100);
+    m["gnss.claim_ratio"] = real([](Scenario& s) -> double& { return s.gnss.claim_ratio; }, 0.01, 100);
+    m["gnss.vel_sigma_mps"] = real([](Scenario& s) -> double& { return s.gnss.vel_sigma_mps; }, 0.001, 100);
+    m["gnss.num_sv"] = [](Scenario& s, const std::string& v, std::string* why) {
+      unsigned long n = 0;
+      if (!parse_id(v, 255, n, why)) return false;
+      s.gnss.num_sv = static_cast<unsigned>(n);
+      return true;
+    };
+    m["gnss.multipath_bias_m"] = real([](Scenario& s) -> double& { return s.gnss.multipath_bias_m; }, 0, 1000);
+    m["gnss.multipath_turn_dps"] = real([](Scenario& s) -> double& { return s.gnss.multipath_turn_dps; }, 0, 360);
+    m["gnss.multipath_claim_factor"] =
+        real([](Scenario& s) -> double& { return s.gnss.multipath_claim_factor; }, 0.1, 100);
+    for (const auto& kind : {std::pair<const char*, GnssWindowKind>{"blocked", GnssWindowKind::kBlocked},
+                             std::pair<const char*, GnssWindowKind>{"multipath", GnssWindowKind::kMultipath}}) {
+      const GnssWindowKind k = kind.second;
+      m[std::string("gnss.") + kind.first] = [k](Scenario& s, const std::string& v, std::string* why) {
+        double x[2] = {0, 0};
+        if (!parse_numbers(v, 2, x, why)) return false;
+        if (!(x[1] > x[0]) || x[0] < 0.0) {
+          *why = "window needs 0 <= START_S < END_S";
+          return false;
+        }
+        s.gnss.windows.push_back(GnssWindow{k, x[0], x[1]});
+        return true;
+      };
+    }
     // [nlos]
     m["nlos.episode_share"] = real([](Scenario& s) -> double& { return s.nlos.episode_share; }, 0, 0.95);
     m["nlos.episode_mean_s"] = real([](Scenario& s) -> double& { return s.nlos.episode_mean_s; }, 0.01, 1e5);
@@ -494,8 +542,8 @@ Status parse_into(const std::string& text, const std::string& origin, Scenario& 
     if (line.front() == '[') {
       if (line.back() != ']' || line.size() < 3) return fail(error, where + "bad section header '" + line + "'");
       section = trim(line.substr(1, line.size() - 2));
-      static const std::set<std::string> kSections = {"scenario", "site",    "imu",    "uwb",
-                                                      "nlos",     "channel", "vehicle", "route"};
+      static const std::set<std::string> kSections = {"scenario", "site",    "imu",     "uwb",
+                                                      "nlos",     "channel", "vehicle", "route", "gnss"};
       if (kSections.count(section) == 0) return fail(error, where + "unknown section [" + section + "]");
       continue;
     }
@@ -537,6 +585,7 @@ void snap_to_recording_precision(Scenario& s) {
   for (TagDef& t : s.tags) {
     for (double& x : t.lever_body_m) to_float(x);
   }
+  for (double& x : s.gnss.lever_body_m) to_float(x);
 }
 
 std::vector<std::string> imu_grade_names() { return {"consumer", "mems", "automotive"}; }
@@ -667,6 +716,17 @@ Status validate_scenario(const Scenario& s, std::string* error) {
   }
   if (s.imu.vibration_hz > 0.0 && s.imu.vibration_hz >= 0.5 * s.imu.rate_hz) {
     return fail(error, "imu.vibration_hz must be below the Nyquist frequency (rate_hz / 2)");
+  }
+  if (s.gnss.enabled) {
+    const GnssConfig& g = s.gnss;
+    const double gnss_period_us = 1e6 / g.rate_hz;
+    if (std::fabs(gnss_period_us - std::round(gnss_period_us)) > 1e-6) {
+      return fail(error, "gnss.rate_hz must divide 1e6 us into an integer period");
+    }
+    if (g.latency_jitter_ms > g.latency_ms) return fail(error, "gnss.latency_jitter_ms exceeds gnss.latency_ms");
+    if (!(std::hypot(g.sigma_h_m, g.sigma_white_m) > 0.0) || !(std::hypot(g.sigma_v_m, g.sigma_white_m) > 0.0)) {
+      return fail(error, "gnss: sigma_h_m, sigma_v_m and sigma_white_m give a zero claimed sigma");
+    }
   }
   const bool copter = s.route.kind == RouteKind::kMulticopter;
   for (const Maneuver& mv : s.route.maneuvers) {

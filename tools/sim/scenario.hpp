@@ -1,5 +1,6 @@
 // Scenario data model of the simulator and its INI-like text format
-// (docs/simulator.md): site, route, IMU errors, UWB ranging, NLOS geometry, channel.
+// (docs/simulator.md): site, route, IMU errors, UWB ranging, NLOS geometry,
+// channel, GNSS receiver.
 #pragma once
 
 #include <cstdint>
@@ -132,6 +133,44 @@ struct UwbConfig {
   double block_max_s = 20.0;           // [s]
   double block_gap_min_s = 10.0;       // [s]
   double block_gap_max_s = 30.0;       // [s]
+  // Coverage: a range whose true distance exceeds this produces nothing.
+  double max_range_m = 0.0;            // [m], 0 = unlimited
+};
+
+// What a GNSS window does to the fixes inside it (docs/simulator.md "GNSS model").
+enum class GnssWindowKind : uint8_t {
+  kBlocked = 0,    // no fix at all (tunnel, bridge)
+  kMultipath = 1,  // extra slowly turning bias, claimed sigma grows only by multipath_claim_factor, fix single
+};
+
+// GNSS window [start_s, end_s).
+struct GnssWindow {
+  GnssWindowKind kind = GnssWindowKind::kBlocked;
+  double start_s = 0.0;  // [s]
+  double end_s = 0.0;    // [s]
+};
+
+// GNSS receiver: position-velocity fixes of its antenna (open sky: DGNSS-like).
+struct GnssConfig {
+  bool enabled = false;                 // false: no fixes (no gnss.csv)
+  double rate_hz = 5.0;                 // fixes per second; 1e6 / rate must be an integer [us]
+  double latency_ms = 80.0;             // mean delay from the time of validity to the arrival [ms]
+  double latency_jitter_ms = 20.0;      // per-fix latency = mean + U[-jitter, +jitter] [ms]
+  double lever_body_m[3] = {0, 0, 0};   // antenna position in the body frame (FLU) [m]
+  // Open-sky position error per navigation axis: first-order Gauss-Markov
+  // (stationary sigma, correlation time) plus white noise.
+  double sigma_h_m = 0.8;               // Gauss-Markov 1-sigma, x and y [m]
+  double sigma_v_m = 1.5;               // Gauss-Markov 1-sigma, z [m]
+  double tau_s = 30.0;                  // Gauss-Markov correlation time [s]
+  double sigma_white_m = 0.1;           // white noise 1-sigma per axis [m]
+  // Claimed sigma = true stationary sigma sqrt(gm^2 + white^2) x claim_ratio (receivers misreport).
+  double claim_ratio = 1.0;             // [-]
+  double vel_sigma_mps = 0.05;          // white velocity noise per axis (claimed: x claim_ratio) [m/s]
+  unsigned num_sv = 12;                 // satellites used in open sky (multipath: about half), 0 = unknown [-]
+  double multipath_bias_m = 4.0;        // horizontal magnitude of the multipath bias [m]
+  double multipath_turn_dps = 5.0;      // its direction turns at U[0.5, 1] x this rate, random sign [deg/s]
+  double multipath_claim_factor = 2.0;  // claimed sigma and velocity noise factor in multipath [-]
+  std::vector<GnssWindow> windows;
 };
 
 struct NlosConfig {
@@ -208,6 +247,7 @@ struct Scenario {
   ChannelConfig channel;
   VehicleConfig vehicle;
   RouteConfig route;
+  GnssConfig gnss;
 };
 
 // Names of the built-in presets; the first is the default scenario.
@@ -230,7 +270,7 @@ std::vector<std::string> scenario_keys();
 // Consistency checks after parsing (ids, rates, probabilities, geometry).
 [[nodiscard]] Status validate_scenario(const Scenario& s, std::string* error);
 
-// Rounds gravity, anchor positions and lever arms to float, the precision the
+// Rounds gravity, anchor positions and lever arms (tags, GNSS antenna) to float, the precision the
 // recording carries (parse_scenario does this; scenarios built in code call it).
 void snap_to_recording_precision(Scenario& s);
 

@@ -1,6 +1,6 @@
 // Simulator core: samples the truth trajectory, applies the MEMS IMU error
-// model (seed 000 Table 1) and the UWB ranging/NLOS/channel models, and fills a
-// format v1 Recording.
+// model (seed 000 Table 1), the UWB ranging/NLOS/channel models and the GNSS
+// receiver model, and fills a format v1 Recording.
 #include "tools/sim/simulator.hpp"
 
 #include <algorithm>
@@ -30,6 +30,7 @@ constexpr uint64_t kStreamRenewal = 0x52454E57ULL;  // "RENW": random NLOS episo
 constexpr uint64_t kStreamBurst = 0x42525354ULL;    // "BRST": Gilbert-Elliott state per pair
 constexpr uint64_t kStreamBlock = 0x424C434BULL;    // "BLCK": anchor blockage schedule
 constexpr uint64_t kStreamSlot2 = 0x534C5432ULL;    // "SLT2": per-slot draws of the episode model
+constexpr uint64_t kStreamGnss = 0x474E5353ULL;     // "GNSS": receiver errors, latency, multipath windows
 
 std::string fmt(double v) {
   char buf[64];
@@ -85,6 +86,32 @@ void fill_meta(const Scenario& sc, const SimOptions& opt, dataset::Recording& re
   }
   if (opt.ideal_imu) rec.meta["sim_ideal_imu"] = "1";
   if (opt.ideal_uwb) rec.meta["sim_ideal_uwb"] = "1";
+  if (sc.uwb.max_range_m > 0.0) rec.meta["sim_uwb_max_range_m"] = fmt(sc.uwb.max_range_m);
+  if (!sc.gnss.enabled) return;
+  const GnssConfig& g = sc.gnss;
+  // The antenna lever is site configuration (meta.ini gnss_lever_m, docs/dataset-format.md);
+  // the rest are simulator facts for evaluation.
+  rec.meta["gnss_lever_m"] = fmt_float(static_cast<float>(g.lever_body_m[0])) + "," +
+                             fmt_float(static_cast<float>(g.lever_body_m[1])) + "," +
+                             fmt_float(static_cast<float>(g.lever_body_m[2]));
+  rec.meta["sim_gnss_rate_hz"] = fmt(g.rate_hz);
+  rec.meta["sim_gnss_latency_ms"] = fmt(g.latency_ms);
+  rec.meta["sim_gnss_latency_jitter_ms"] = fmt(g.latency_jitter_ms);
+  rec.meta["sim_gnss_sigma_h_m"] = fmt(g.sigma_h_m);
+  rec.meta["sim_gnss_sigma_v_m"] = fmt(g.sigma_v_m);
+  rec.meta["sim_gnss_tau_s"] = fmt(g.tau_s);
+  rec.meta["sim_gnss_sigma_white_m"] = fmt(g.sigma_white_m);
+  rec.meta["sim_gnss_claim_ratio"] = fmt(g.claim_ratio);
+  if (!g.windows.empty()) {
+    std::string list;
+    for (const GnssWindow& w : g.windows) {
+      if (!list.empty()) list += ' ';
+      list += "[" + fmt(w.start_s) + "," + fmt(w.end_s) + "):" +
+              (w.kind == GnssWindowKind::kBlocked ? "blocked" : "multipath");
+    }
+    rec.meta["sim_gnss_windows_s"] = list;
+  }
+  if (g.multipath_bias_m > 0.0) rec.meta["sim_gnss_multipath_bias_m"] = fmt(g.multipath_bias_m);
 }
 
 // Simulator facts of the new error models (evaluation only; the firmware never reads meta.ini).
@@ -249,6 +276,7 @@ Status fill_site(const Scenario& sc, const std::vector<AnchorDef>& anchors, Site
   site.platform = sc.platform == "air" ? Platform::kAir : Platform::kGround;
   site.gravity_mps2 = static_cast<float>(sc.gravity_mps2);
   site.has_imu = sc.imu.enabled;
+  if (sc.gnss.enabled) site.gnss_lever_body_m = to_vec3f(sc.gnss.lever_body_m);
   return Status::kOk;
 }
 
@@ -575,6 +603,7 @@ void simulate_uwb(const Scenario& sc, const SimOptions& opt, const Trajectory& t
 
     const bool burst_lost = burst_loss > 0.0 && bursts[pair].step(burst_loss, sc.uwb.burst_mean_len);
     if (in_outage(sc, t_us) || blocked(a, t_us) || u_loss < packet_loss || burst_lost) return;
+    if (sc.uwb.max_range_m > 0.0 && true_range > sc.uwb.max_range_m) return;  // out of coverage
 
     const double js = nl.bias_jitter_shape;
     const double jitter_norm = -0.5 * js * js;  // keeps E[jitter] = 1
@@ -627,6 +656,131 @@ void simulate_uwb(const Scenario& sc, const SimOptions& opt, const Trajectory& t
     out.rec.uwb.push_back(row);
     out.range_truth.push_back(RangeTruth{true_range, bias, systematic, cause});
   });
+}
+
+// GNSS fixes of the antenna (truth + R lever) at k / rate_hz: per navigation
+// axis a first-order Gauss-Markov error plus white noise; in multipath windows
+// an extra horizontal bias of multipath_bias_m whose direction turns slowly
+// (vertical: half of it, phase-shifted), fix single, claimed sigma and velocity
+// noise x multipath_claim_factor; none in blocked windows. Own random streams:
+// one sequential stream draws the same numbers every epoch (fix or not), one
+// the latencies, one per window its multipath parameters.
+void simulate_gnss(const Scenario& sc, const SimOptions& opt, const Trajectory& traj, uint64_t dur_us,
+                   SimOutput& out) {
+  const GnssConfig& g = sc.gnss;
+  if (!g.enabled) return;
+  const uint64_t period_us = static_cast<uint64_t>(std::llround(1e6 / g.rate_hz));
+  const double phi = std::exp(-static_cast<double>(period_us) * 1e-6 / g.tau_s);
+  const double drive = std::sqrt(1.0 - phi * phi);
+  const double gm_sigma[3] = {g.sigma_h_m, g.sigma_h_m, g.sigma_v_m};
+  double claim_m[3];
+  for (int i = 0; i < 3; ++i) claim_m[i] = std::hypot(gm_sigma[i], g.sigma_white_m) * g.claim_ratio;
+
+  struct Multipath {
+    double theta0_rad = 0.0;     // bias direction at the window start, from nav x, CCW
+    double turn_radps = 0.0;     // its turn rate
+    double phase_v_rad = 0.0;    // vertical component: 0.5 bias sin(theta + phase)
+  };
+  std::vector<Multipath> mp(g.windows.size());
+  for (size_t w = 0; w < g.windows.size(); ++w) {
+    Rng r(mix_seed(opt.seed, kStreamGnss, 100 + w));
+    mp[w].theta0_rad = r.uniform(-kPi, kPi);
+    mp[w].turn_radps = (r.uniform() < 0.5 ? -1.0 : 1.0) * r.uniform(0.5, 1.0) * g.multipath_turn_dps * kDeg;
+    mp[w].phase_v_rad = r.uniform(-kPi, kPi);
+  }
+
+  Rng err(mix_seed(opt.seed, kStreamGnss, 1));
+  Rng lat(mix_seed(opt.seed, kStreamGnss, 2));
+  double gm[3];
+  for (int i = 0; i < 3; ++i) gm[i] = gm_sigma[i] * err.normal();  // stationary from the start
+  // Exactly the lever the recording carries (float, meta.ini gnss_lever_m).
+  const Vec3f lever_f = to_vec3f(g.lever_body_m);
+  const Eigen::Vector3d lever(static_cast<double>(lever_f.x), static_cast<double>(lever_f.y),
+                              static_cast<double>(lever_f.z));
+  std::vector<GnssFix> fixes;
+  std::vector<GnssTruth> truths;
+  for (uint64_t k = 0;; ++k) {
+    const uint64_t t_us = k * period_us;
+    if (t_us >= dur_us) break;
+    if (k > 0) {
+      for (int i = 0; i < 3; ++i) gm[i] = phi * gm[i] + gm_sigma[i] * drive * err.normal();
+    }
+    double n_white[3];
+    double n_vel[3];
+    for (double& n : n_white) n = err.normal();
+    for (double& n : n_vel) n = err.normal();
+    const double u_sv = err.uniform();
+    const double u_latency = lat.uniform();
+
+    const double t_s = static_cast<double>(t_us) * 1e-6;
+    bool blocked = false;
+    const GnssWindow* window = nullptr;
+    size_t window_index = 0;
+    for (size_t w = 0; w < g.windows.size(); ++w) {
+      const GnssWindow& gw = g.windows[w];
+      if (t_s < gw.start_s || t_s >= gw.end_s) continue;
+      if (gw.kind == GnssWindowKind::kBlocked) blocked = true;
+      if (gw.kind == GnssWindowKind::kMultipath && window == nullptr) {
+        window = &gw;
+        window_index = w;
+      }
+    }
+    if (blocked) continue;
+    const double latency_ms = std::max(0.0, g.latency_ms + g.latency_jitter_ms * (2.0 * u_latency - 1.0));
+    GnssFix fix;
+    fix.t_us = t_us;
+    fix.rx_t_us = t_us + static_cast<uint64_t>(std::llround(latency_ms * 1e3));
+    if (fix.rx_t_us >= dur_us) continue;  // arrives after the end of the recording
+
+    const KinState st = traj.at(t_us);
+    const Eigen::Vector3d antenna = st.pos_nav_m + st.R_nav_body * lever;
+    // Lever-arm term: w_nav x (R l) = R (w_body x l), with the true body rate.
+    const Eigen::Vector3d antenna_vel = st.vel_nav_mps + st.R_nav_body * st.gyro_body_radps.cross(lever);
+    Eigen::Vector3d error(gm[0] + g.sigma_white_m * n_white[0], gm[1] + g.sigma_white_m * n_white[1],
+                          gm[2] + g.sigma_white_m * n_white[2]);
+    double factor = 1.0;
+    if (window != nullptr) {
+      const Multipath& m = mp[window_index];
+      const double theta = m.theta0_rad + m.turn_radps * (t_s - window->start_s);
+      error += g.multipath_bias_m *
+               Eigen::Vector3d(std::cos(theta), std::sin(theta), 0.5 * std::sin(theta + m.phase_v_rad));
+      factor = g.multipath_claim_factor;
+    }
+    const Eigen::Vector3d pos = antenna + error;
+    const Eigen::Vector3d vel =
+        antenna_vel + g.vel_sigma_mps * factor * Eigen::Vector3d(n_vel[0], n_vel[1], n_vel[2]);
+    fix.pos_nav_m = Vec3f{static_cast<float>(pos.x()), static_cast<float>(pos.y()), static_cast<float>(pos.z())};
+    fix.pos_sigma_m = Vec3f{static_cast<float>(claim_m[0] * factor), static_cast<float>(claim_m[1] * factor),
+                            static_cast<float>(claim_m[2] * factor)};
+    fix.vel_nav_mps = Vec3f{static_cast<float>(vel.x()), static_cast<float>(vel.y()), static_cast<float>(vel.z())};
+    fix.vel_sigma_mps = static_cast<float>(g.vel_sigma_mps * g.claim_ratio * factor);
+    fix.fix = window != nullptr ? GnssFixType::kSingle : GnssFixType::kDgnss;
+    if (g.num_sv > 0) {
+      const int base = static_cast<int>(window != nullptr ? (g.num_sv + 1) / 2 : g.num_sv);
+      const int jitter = std::min(2, static_cast<int>(u_sv * 3.0)) - 1;  // -1, 0 or +1
+      fix.num_sv = static_cast<uint8_t>(std::min(255, std::max(4, base + jitter)));
+    }
+    GnssTruth truth;
+    for (int i = 0; i < 3; ++i) {
+      truth.antenna_nav_m[i] = antenna[i];
+      truth.antenna_vel_nav_mps[i] = antenna_vel[i];
+      truth.error_nav_m[i] = error[i];
+    }
+    truth.multipath = window != nullptr;
+    fixes.push_back(fix);
+    truths.push_back(truth);
+  }
+  // Arrival order (the recording's order); jitter above half the period can swap neighbours.
+  std::vector<size_t> order(fixes.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return fixes[a].rx_t_us < fixes[b].rx_t_us; });
+  out.rec.gnss.reserve(fixes.size());
+  out.gnss_truth.reserve(fixes.size());
+  for (size_t i : order) {
+    out.rec.gnss.push_back(fixes[i]);
+    out.gnss_truth.push_back(truths[i]);
+  }
 }
 
 // Seed 000 §2.1: per (tag, anchor), a random `protocol_fraction` of the ranges
@@ -683,6 +837,7 @@ Status simulate_scenario(const Scenario& scenario, const SimOptions& options, Si
   simulate_imu(scenario, options, traj, dur_us, out);
   simulate_uwb(scenario, options, traj, dur_us, out);
   if (scenario.nlos.protocol && !options.ideal_uwb) apply_protocol(scenario, options, out);
+  simulate_gnss(scenario, options, traj, dur_us, out);
   return Status::kOk;
 }
 

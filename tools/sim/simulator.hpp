@@ -1,5 +1,5 @@
-// Deterministic UWB/IMU scenario simulator: produces a format v1 Recording
-// (truth, IMU, ranges with NLOS labels) from a scenario preset or file.
+// Deterministic UWB/IMU/GNSS scenario simulator: produces a format v1 Recording
+// (truth, IMU, ranges with NLOS labels, GNSS fixes) from a scenario preset or file.
 #pragma once
 
 #include <cstdint>
@@ -73,6 +73,14 @@ struct TruthState {
   double accel_body_mps2[3] = {0, 0, 0};    // true specific force (FLU, +g on z at rest)
 };
 
+// Per-fix ground truth, parallel to Recording::gnss (evaluation only).
+struct GnssTruth {
+  double antenna_nav_m[3] = {0, 0, 0};         // true antenna position at t_us (body origin + R lever) [m]
+  double antenna_vel_nav_mps[3] = {0, 0, 0};   // true antenna velocity (v + R (w x lever)) [m/s]
+  double error_nav_m[3] = {0, 0, 0};           // fix minus truth before rounding to float [m]
+  bool multipath = false;                      // inside a multipath window
+};
+
 struct SimOutput {
   dataset::Recording rec;
   std::vector<TruthState> truth;         // same instants as rec.truth / rec.imu
@@ -81,6 +89,7 @@ struct SimOutput {
   std::vector<AnchorDef> anchors_surveyed;  // what anchors.csv carries (true + survey error)
   std::vector<PairError> pair_errors;    // per (tag, anchor), tag-major
   std::vector<Blockage> blockages;       // anchor blockage schedule
+  std::vector<GnssTruth> gnss_truth;     // same order as rec.gnss
 };
 
 // Simulates a parsed scenario.
