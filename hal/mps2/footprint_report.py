@@ -135,7 +135,7 @@ def main():
     L.append(f"RBF outage bridge (estimator/rbf_*, docs/ekf.md \"Outage bridging\"): {rbf_text}.")
     gnss = cfg.get("UWBNAV_MPS2_GNSS", "0")
     gnss_text = {"0": "compiled out (`UWBNAV_MPS2_GNSS=0`, the board default: the MPS2 board has no receiver; "
-                      "its cost with it in is under \"GNSS fusion\" in docs/ekf.md)",
+                      "its cost with it in: docs/ekf.md \"GNSS\", \"Cost on the Cortex-M4F\")",
                  "1": "compiled in (`UWBNAV_MPS2_GNSS=1`; the replay has no fixes, so the cycle figures do not "
                       "include GNSS updates)"}.get(gnss, f"`UWBNAV_MPS2_GNSS={gnss}`")
     L.append(f"GNSS fusion (estimator/mm_gnss.*, navigator_gnss.cpp, docs/ekf.md \"GNSS\"): {gnss_text}.")
