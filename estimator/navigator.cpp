@@ -130,6 +130,9 @@ Status Navigator::configure(const SiteConfig& site, const Params& params) {
   }
   planar_ = static_cast<Real>(z_hi - z_lo) < cfg_.planar_spread;
   diag_ = NavDiagnostics{};
+#if UWBNAV_COOP
+  for (NeighbourSlot& n : neighbours_) n = NeighbourSlot{};
+#endif
   for (size_t i = 0; i < kMaxAnchors; ++i) {
     anchor_status_[i] = AnchorStatus{};
     if (i < site_.num_anchors) anchor_status_[i].anchor_id = site_.anchors[i].id;
@@ -219,6 +222,17 @@ void Navigator::update_params(const Params& params) {
   c.gnss_gate_sigma = static_cast<Real>(params[ParamId::kGnssGateSigma]);
   c.gnss_max_latency_us = param_us(params[ParamId::kGnssMaxLatency] * 1e6F);
   c.gnss_use_vel = params[ParamId::kGnssUseVel] > 0.5F;
+#endif
+#if UWBNAV_COOP
+  c.coop_enable = params[ParamId::kCoopEnable] > 0.5F;
+  c.coop_max_age_us = param_us(params[ParamId::kCoopMaxAge] * 1e6F);
+  c.coop_max_sigma = static_cast<Real>(params[ParamId::kCoopMaxSigma]);
+  c.coop_gate_sigma = static_cast<Real>(params[ParamId::kCoopGateSigma]);
+  c.coop_accept_dependent = params[ParamId::kCoopAcceptDependent] > 0.5F;
+  c.coop_hold_us = param_us(params[ParamId::kCoopHold] * 1e6F);
+  c.coop_extrap_accel = static_cast<Real>(params[ParamId::kCoopExtrapAccel]);
+  c.coop_corr_time = static_cast<Real>(params[ParamId::kCoopCorrTime]);
+  c.coop_occluder_m = static_cast<Real>(params[ParamId::kCoopOccluderM]);
 #endif
 #if UWBNAV_RBF_BRIDGE
   bridge_.configure(c.rbf_mode);
@@ -655,6 +669,9 @@ RangeReport Navigator::on_range(const UwbRange& range) {
   rep.range_m = range.range_m;
   if (!configured_) return rep;
   ++diag_.ranges_received;
+#if UWBNAV_COOP
+  if (is_vehicle_id(range.anchor_id)) return on_neighbour_range(range, rep);
+#endif
   const int ai = site_.find_anchor(range.anchor_id);
   int ti = site_.num_tags == 0 ? 0 : site_.find_tag(range.tag_id);
   if (ai < 0 || ti < 0 || static_cast<size_t>(ti) >= kMaxTags || !std::isfinite(range.range_m)) {
@@ -1144,6 +1161,10 @@ NavOutput Navigator::output(uint64_t t_us) {
 #if UWBNAV_GNSS
   // A fused GNSS fix aids the filter as a range does: no outage while fixes come.
   if (diag_.last_gnss_used_t_us > last_uwb_us) last_uwb_us = diag_.last_gnss_used_t_us;
+#endif
+#if UWBNAV_COOP
+  // So does a fused range to a neighbour vehicle.
+  if (diag_.last_neighbour_used_t_us > last_uwb_us) last_uwb_us = diag_.last_neighbour_used_t_us;
 #endif
   const bool uwb_outage = diff_us(t_us, last_uwb_us) > static_cast<int64_t>(cfg_.uwb_timeout_us);
   const Real sigma_h = std::sqrt(var_p[0] + var_p[1]);

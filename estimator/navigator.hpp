@@ -49,7 +49,22 @@ struct NavDiagnostics {
   uint32_t gnss_rejected[static_cast<size_t>(GnssVerdict::kCount)] = {};  // per GnssVerdict (kFused unused)
   uint64_t last_gnss_used_t_us = 0;  // time of validity of the last fused fix [us]
 #endif
+#if UWBNAV_COOP
+  uint32_t neighbour_states = 0;     // neighbour states stored (on_neighbour_state kOk)
+  uint32_t neighbour_evictions = 0;  // states that displaced the stalest vehicle of a full table
+  uint32_t neighbour_ranges = 0;     // ranges to neighbour vehicles received
+  uint32_t neighbour_used = 0;       // of which fused
+  uint32_t neighbour_rejected[static_cast<size_t>(NeighbourVerdict::kCount)] = {};  // per verdict (kFused unused)
+  uint64_t last_neighbour_used_t_us = 0;  // time of the last fused neighbour range [us]
+#endif
 };
+
+// Capacity of the neighbour table (latest broadcast state per vehicle). A state
+// from a vehicle not in a full table replaces the vehicle heard from least recently.
+#ifndef UWBNAV_MAX_NEIGHBOURS
+#define UWBNAV_MAX_NEIGHBOURS 8
+#endif
+constexpr size_t kMaxNeighbours = UWBNAV_MAX_NEIGHBOURS;
 
 // The range-error state of one anchor, for the console and diagnostics.
 struct AnchorOffset {
@@ -88,6 +103,15 @@ class Navigator {
   // One validated GNSS fix (docs/ekf.md "GNSS"): loose position (and velocity)
   // update of the running filter at the fix's time of validity, lever arm applied.
   [[nodiscard]] GnssReport on_gnss(const GnssFix& fix);
+#if UWBNAV_COOP
+  // One validated broadcast state of a neighbour vehicle: kept (latest per
+  // vehicle) for the ranges to its tag. kInvalidArgument: not a vehicle id,
+  // or older than the state already held for that vehicle.
+  [[nodiscard]] Status on_neighbour_state(const NeighbourState& state);
+  // True while this vehicle's estimate depends on neighbour ranges (the last one
+  // fused less than coop.dependent_hold ago): its own broadcast says so.
+  bool cooperative_at(uint64_t t_us) const;
+#endif
   // The solution at t_us (end of a 10 ms cycle). Resets per-cycle counters.
   [[nodiscard]] NavOutput output(uint64_t t_us);
 
@@ -166,6 +190,17 @@ class Navigator {
     Real gnss_gate_sigma = Real(5);
     uint64_t gnss_max_latency_us = 500000;
     bool gnss_use_vel = true;
+#endif
+#if UWBNAV_COOP
+    bool coop_enable = true;
+    uint64_t coop_max_age_us = 500000;
+    Real coop_max_sigma = Real(1);    // [m] horizontal
+    Real coop_gate_sigma = Real(4);
+    bool coop_accept_dependent = false;
+    uint64_t coop_hold_us = 10000000;
+    Real coop_extrap_accel = Real(2);  // [m/s^2]
+    Real coop_corr_time = Real(10);    // [s]
+    Real coop_occluder_m = Real(1.5);  // [m] line of sight to another car's position closer than this: blocked
 #endif
   };
 
@@ -383,6 +418,18 @@ class Navigator {
   RbfBridge bridge_;
   uint64_t bridge_last_us_ = 0;   // last pseudo-measurement [us]
   uint32_t bridge_count_ = 0;     // pseudo-measurements in the current outage
+#endif
+
+#if UWBNAV_COOP
+  // Latest broadcast state per neighbour vehicle, and when a range to it was last fused.
+  struct NeighbourSlot {
+    NeighbourState state;
+    uint64_t prev_fused_us = 0;   // time of the previous fused range to this vehicle [us] (correlation)
+    bool used = false;
+  };
+  NeighbourSlot neighbours_[kMaxNeighbours];
+  RangeReport on_neighbour_range(const UwbRange& range, RangeReport rep);
+  bool occluded(uint64_t t_us, const NeighbourSlot* target, const Vec3& tag_nav_m, const Vec3& target_nav_m) const;
 #endif
 
 #if UWBNAV_GNSS

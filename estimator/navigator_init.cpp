@@ -68,6 +68,12 @@ void Navigator::restart(bool counted_reset) {
 #if UWBNAV_GNSS
   gnss_prev_fused_us_ = 0;
 #endif
+#if UWBNAV_COOP
+  for (NeighbourSlot& n : neighbours_) {
+    n.prev_fused_us = 0;
+    n.used = false;
+  }
+#endif
   cv_mode_ = false;
   cv_yaw_known_ = false;
   height_on_ = false;

@@ -23,6 +23,12 @@ namespace uwbnav {
 #define UWBNAV_GNSS 1
 #endif
 
+// Cooperative ranging to neighbour vehicles (estimator/navigator_coop.cpp, the
+// UWBNAV_Coop* CAN frames). hal/mps2 builds without it (UWBNAV_COOP=0).
+#ifndef UWBNAV_COOP
+#define UWBNAV_COOP 1
+#endif
+
 enum class ParamId : uint16_t {
 #define X(e, id, name, unit, kind, def, lo, hi, doc) e,
 #include "estimator/params_table.inc"

@@ -66,6 +66,29 @@ struct GnssFix {
   uint8_t num_sv = 0;           // satellites used, 0 = unknown
 };
 
+// Ranges to another vehicle's tag (issue 16 item 1, docs/dataset-format.md
+// "neighbours.csv"): a UwbRange whose anchor_id is at least kFirstVehicleId
+// names a vehicle, not a surveyed anchor. Vehicle ids are kFirstVehicleId..0xFFFE.
+constexpr uint16_t kFirstVehicleId = 0x8000;
+constexpr uint16_t kNoVehicleId = 0xFFFF;
+constexpr bool is_vehicle_id(uint16_t id) { return id >= kFirstVehicleId && id != kNoVehicleId; }
+
+// One broadcast state of another vehicle's ranging tag: what that vehicle's
+// uwbnav publishes (CAN UWBNAV_Coop*, or a recording's neighbours.csv).
+// Position and covariance are of the tag antenna the vehicle ranges with.
+struct NeighbourState {
+  uint64_t t_us = 0;            // time of validity, sensor clock [us]
+  uint64_t rx_t_us = 0;         // arrival at the ECU [us], >= t_us
+  uint16_t vehicle_id = kNoVehicleId;  // sender, kFirstVehicleId..0xFFFE
+  Vec3f pos_nav_m;              // tag antenna, navigation frame [m]
+  // Position covariance, navigation frame [m^2]: xx, xy, xz, yy, yz, zz.
+  float cov_pos_m2[6] = {kNaNf, kNaNf, kNaNf, kNaNf, kNaNf, kNaNf};
+  Vec3f vel_nav_mps{kNaNf, kNaNf, kNaNf};  // tag velocity, navigation frame [m/s]; NaN when not reported
+  // True when the sender's own state used neighbour ranges recently: its
+  // estimate then shares information with other vehicles (maybe with us).
+  bool cooperative = false;
+};
+
 // Boards with little RAM may build with fewer tags (UWBNAV_MAX_TAGS, e.g.
 // hal/mps2); per anchor/tag pair state scales with kMaxAnchors * kMaxTags.
 #ifndef UWBNAV_MAX_TAGS
@@ -243,5 +266,35 @@ struct GnssReport {
   float nis_max = kNaNf;         // largest innov^2 / S over the position axes [-]
   bool vel_used = false;         // the velocity was fused too
 };
+
+// What the Navigator did with one range to a neighbour vehicle.
+enum class NeighbourVerdict : uint8_t {
+  kFused = 0,      // fused with the neighbour's uncertainty considered
+  kDisabled,       // coop.enable = 0, or the build has no cooperative ranging
+  kNoFilter,       // no filter running yet: neighbour ranges do not start one
+  kUnknown,        // no broadcast state of that vehicle in the table
+  kStale,          // the neighbour's state is older than coop.max_age
+  kDependent,      // the neighbour's state is itself cooperative (double counting)
+  kUncertain,      // the neighbour's claimed position sigma exceeds coop.max_sigma
+  kOccluded,       // another neighbour's car lies on the line of sight (coop.occluder_m)
+  kGate,           // innovation outside coop.gate_sigma
+  kCount
+};
+
+constexpr const char* neighbour_verdict_name(NeighbourVerdict v) {
+  switch (v) {
+    case NeighbourVerdict::kFused: return "fused";
+    case NeighbourVerdict::kDisabled: return "disabled";
+    case NeighbourVerdict::kNoFilter: return "no_filter";
+    case NeighbourVerdict::kUnknown: return "unknown";
+    case NeighbourVerdict::kStale: return "stale";
+    case NeighbourVerdict::kDependent: return "dependent";
+    case NeighbourVerdict::kUncertain: return "uncertain";
+    case NeighbourVerdict::kOccluded: return "occluded";
+    case NeighbourVerdict::kGate: return "gate";
+    case NeighbourVerdict::kCount: break;
+  }
+  return "unknown";
+}
 
 }  // namespace uwbnav

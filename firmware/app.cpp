@@ -43,6 +43,9 @@ Status App::init() {
   can_tx_.configure(params_);
   can_decoder_.configure(params_);
   hil_rx_enabled_ = params_[ParamId::kCanHilRxEnable] > 0.5F;
+#if UWBNAV_COOP
+  can_decoder_.set_hil_enabled(hil_rx_enabled_);
+#endif
   const Status s = nav_.configure(board_.site, params_);
   initialised_ = ok(s);
   return s;
@@ -61,6 +64,9 @@ void App::apply_params(const Params& params) {
   can_tx_.configure(params_);
   can_decoder_.configure(params_);
   hil_rx_enabled_ = params_[ParamId::kCanHilRxEnable] > 0.5F;
+#if UWBNAV_COOP
+  can_decoder_.set_hil_enabled(hil_rx_enabled_);
+#endif
 }
 
 Status App::save_params() {
@@ -173,7 +179,13 @@ void App::drain_sensors(uint64_t now_us) {
     if (!ok(s)) break;
     ignore_result(accept_uwb(r, now_us, stats_.uwb));
   }
+#if UWBNAV_COOP
+  // Neighbour states arrive on the vehicle bus (V2X_Neighbour*) with or without
+  // a HIL rig; the decoder drops the HIL sensor groups when HIL is off.
+  drain_can_sensors(now_us);
+#else
   if (hil_rx_enabled_) drain_can_sensors(now_us);
+#endif
 }
 
 // HIL rigs inject sensors as CAN frames (docs/can.md); the decoder checks the
@@ -204,6 +216,13 @@ void App::drain_can_sensors(uint64_t now_us) {
       continue;
     }
     if (!ok(s)) continue;
+#if UWBNAV_COOP
+    if (sample.kind == can::SensorKind::kNeighbour) {
+      // A neighbour state carries its own latency; the validator judges it.
+      accept_neighbour(sample.neighbour, now_us);
+      continue;
+    }
+#endif
     const uint64_t t = sample.kind == can::SensorKind::kImu ? sample.imu.t_us : sample.uwb.t_us;
     if (t > now_us && can_pending_count_ < kMaxCanPending) {
       can_pending_[can_pending_count_++] = sample;
@@ -271,16 +290,62 @@ void App::drain_gnss(uint64_t now_us) {
 #endif
 }
 
+#if UWBNAV_COOP
+void App::accept_neighbour(const NeighbourState& s, uint64_t now_us) {
+  ++stats_.neighbours.received;
+  const Verdict v = validator_.check_neighbour(s, now_us);
+  if (!v.accepted) {
+    ++stats_.neighbours.rejected[static_cast<size_t>(v.reason)];
+    return;
+  }
+  // The validator has checked what the navigator would refuse.
+  if (ok(nav_.on_neighbour_state(s))) {
+    ++stats_.neighbours.accepted;
+  } else {
+    ++stats_.neighbours.rejected[static_cast<size_t>(RejectReason::kOutOfRange)];
+  }
+}
+
+void App::drain_neighbours(uint64_t now_us) {
+  if (board_.neighbours == nullptr) return;
+  NeighbourState s;
+  for (size_t n = 0; n < kMaxNeighboursPerCycle; ++n) {
+    const Status st = board_.neighbours->poll(now_us, s);
+    if (st == Status::kIoError) {
+      ++stats_.neighbours.io_errors;
+      break;
+    }
+    if (!ok(st)) break;
+    accept_neighbour(s, now_us);
+  }
+}
+
+// This vehicle's state for its neighbours (UWBNAV_Coop*), at its first tag
+// antenna: the point their ranges to this vehicle end at.
+void App::publish_coop_state() {
+  const uint16_t id = can_tx_.coop_vehicle_id();
+  if (id == kNoVehicleId) return;
+  const Vec3f lever_body_m = board_.site.num_tags > 0 ? board_.site.tags[0].lever_body_m : Vec3f{};
+  can_tx_.set_coop_state(can::coop_state_from(last_output_, lever_body_m, id, nav_.cooperative_at(last_output_.t_us)));
+}
+#endif
+
 void App::tick(uint64_t now_us) {
   last_tick_us_ = now_us;
   if (initialised_) {
     drain_sensors(now_us);
+#if UWBNAV_COOP
+    drain_neighbours(now_us);
+#endif
     process_in_time_order();
     drain_gnss(now_us);
     last_output_ = nav_.output(now_us);
     if (observer_ != nullptr) observer_->on_output(last_output_);
     can_diag_.set_from_stats(stats_);
     can_diag_.resets = last_output_.resets;
+#if UWBNAV_COOP
+    publish_coop_state();
+#endif
     can_tx_.on_cycle(now_us, last_output_, can_diag_, board_.can);
   }
   console_.poll(now_us);

@@ -32,6 +32,7 @@ constexpr size_t kMaxUwbPerCycle = UWBNAV_MAX_UWB_PER_CYCLE;
 static_assert(kMaxImuPerCycle >= 1 && kMaxUwbPerCycle >= 1, "a cycle must accept at least one frame of each");
 constexpr size_t kMaxCanRxPerCycle = 64;    // HIL input frames read per cycle
 constexpr size_t kMaxGnssPerCycle = 4;      // GNSS fixes drained per cycle (receivers send 1-20 Hz)
+constexpr size_t kMaxNeighboursPerCycle = 8;  // neighbour states drained per cycle from the board source
 #ifndef UWBNAV_MAX_CAN_PENDING
 #define UWBNAV_MAX_CAN_PENDING 16
 #endif
@@ -102,6 +103,13 @@ class App {
   void process_in_time_order();
   void handle_range(const UwbRange& r);
   void drain_gnss(uint64_t now_us);
+#if UWBNAV_COOP
+  // Neighbour states from the board's source (recordings), before the cycle's
+  // ranges so that a range finds the state broadcast before it.
+  void drain_neighbours(uint64_t now_us);
+  void accept_neighbour(const NeighbourState& s, uint64_t now_us);
+  void publish_coop_state();
+#endif
 
   hal::Board& board_;
   Params params_;

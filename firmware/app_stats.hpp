@@ -90,6 +90,11 @@ struct AppStats {
 #if UWBNAV_GNSS
   SourceStats gnss;               // GNSS fixes (board GnssSource), zero on boards without one
 #endif
+#if UWBNAV_COOP
+  // Neighbour vehicles' broadcast states (board NeighbourSource or CAN V2X_Neighbour*).
+  // Ranges to their tags are counted with the other ranges (uwb, can_rx).
+  SourceStats neighbours;
+#endif
   LoopStats loop;
 };
 

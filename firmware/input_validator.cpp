@@ -30,6 +30,9 @@ void InputValidator::update_params(const Params& params) {
 #if UWBNAV_GNSS
   gnss_max_latency_us_ = param_us(params[ParamId::kGnssMaxLatency] * 1e6F);
 #endif
+#if UWBNAV_COOP
+  coop_max_age_us_ = param_us(params[ParamId::kCoopMaxAge] * 1e6F);
+#endif
 }
 
 void InputValidator::reset_history() {
@@ -42,6 +45,9 @@ void InputValidator::reset_history() {
   last_gnss_t_us_ = 0;
 #endif
   std::memset(have_pair_, 0, sizeof have_pair_);
+#if UWBNAV_COOP
+  for (VehicleHistory& h : vehicles_) h = VehicleHistory{};
+#endif
 }
 
 Verdict InputValidator::check_time(uint64_t t_us, uint64_t now_us, uint64_t last_t_us, bool have_last) const {
@@ -70,6 +76,9 @@ Verdict InputValidator::check_uwb(const UwbRange& r, uint64_t now_us) {
   if (std::isinf(r.fp_power_dbm) || std::isinf(r.rx_power_dbm)) return reject(RejectReason::kNotFinite);
   if (r.range_m < min_range_m_ || r.range_m > max_range_m_) return reject(RejectReason::kOutOfRange);
   if (site_ == nullptr) return reject(RejectReason::kUnknownAnchor);
+#if UWBNAV_COOP
+  if (is_vehicle_id(r.anchor_id)) return check_vehicle_range(r, now_us);
+#endif
   const int a = site_->find_anchor(r.anchor_id);
   if (a < 0) return reject(RejectReason::kUnknownAnchor);
   const int g = site_->find_tag(r.tag_id);
@@ -109,6 +118,72 @@ Verdict InputValidator::check_gnss(const GnssFix& f, uint64_t now_us) {
   if (have_gnss_ && f.t_us < last_gnss_t_us_) return reject(RejectReason::kOutOfOrder);
   have_gnss_ = true;
   last_gnss_t_us_ = f.t_us;
+  return Verdict{true, RejectReason::kNotFinite};
+}
+#endif
+
+#if UWBNAV_COOP
+InputValidator::VehicleHistory& InputValidator::vehicle_history(uint16_t vehicle_id, uint64_t now_us) {
+  VehicleHistory* victim = nullptr;  // a free entry, else the one used least recently
+  for (VehicleHistory& h : vehicles_) {
+    if (h.vehicle_id == vehicle_id) {
+      h.last_use_us = now_us;
+      return h;
+    }
+    const bool free = h.vehicle_id == kNoVehicleId;
+    if (victim == nullptr || (free && victim->vehicle_id != kNoVehicleId) ||
+        (!free && victim->vehicle_id != kNoVehicleId && h.last_use_us < victim->last_use_us)) {
+      victim = &h;
+    }
+  }
+  *victim = VehicleHistory{};
+  victim->vehicle_id = vehicle_id;
+  victim->last_use_us = now_us;
+  return *victim;
+}
+
+// A range to a neighbour vehicle's tag: the same checks as a range to an
+// anchor, duplicates kept per vehicle and tag.
+Verdict InputValidator::check_vehicle_range(const UwbRange& r, uint64_t now_us) {
+  const int g = site_->find_tag(r.tag_id);
+  if (g < 0) return reject(RejectReason::kUnknownTag);
+  const size_t gi = static_cast<size_t>(g);
+  const Verdict v = check_time(r.t_us, now_us, last_uwb_t_us_, have_uwb_);
+  if (!v.accepted) return v;
+  VehicleHistory& h = vehicle_history(r.anchor_id, now_us);
+  if (h.have_range[gi] && r.t_us == h.range_t_us[gi]) return reject(RejectReason::kDuplicate);
+  have_uwb_ = true;
+  last_uwb_t_us_ = r.t_us;
+  h.have_range[gi] = true;
+  h.range_t_us[gi] = r.t_us;
+  return v;
+}
+
+Verdict InputValidator::check_neighbour(const NeighbourState& s, uint64_t now_us) {
+  if (!is_vehicle_id(s.vehicle_id)) return reject(RejectReason::kUnknownAnchor);
+  if (!finite3(s.pos_nav_m)) return reject(RejectReason::kNotFinite);
+  for (float c : s.cov_pos_m2) {
+    if (!std::isfinite(c)) return reject(RejectReason::kNotFinite);
+  }
+  // Velocity is optional (NaN = not reported) but never Inf.
+  if (std::isinf(s.vel_nav_mps.x) || std::isinf(s.vel_nav_mps.y) || std::isinf(s.vel_nav_mps.z)) {
+    return reject(RejectReason::kNotFinite);
+  }
+  constexpr float kMaxPos_m = 1.0e6F;  // a local navigation frame, not ECEF
+  const float* c = s.cov_pos_m2;       // xx, xy, xz, yy, yz, zz
+  const float det = c[0] * (c[3] * c[5] - c[4] * c[4]) - c[1] * (c[1] * c[5] - c[4] * c[2]) +
+                    c[2] * (c[1] * c[4] - c[3] * c[2]);
+  const bool pd = c[0] > 0.0F && c[3] > 0.0F && c[5] > 0.0F && c[0] * c[3] - c[1] * c[1] > 0.0F && det > 0.0F;
+  if (!pd || norm3(s.pos_nav_m) > kMaxPos_m || s.rx_t_us < s.t_us || s.rx_t_us - s.t_us > coop_max_age_us_) {
+    return reject(RejectReason::kOutOfRange);
+  }
+  if (s.rx_t_us > now_us) return reject(RejectReason::kFuture);
+  if (now_us - s.rx_t_us > stale_us_) return reject(RejectReason::kStale);
+  VehicleHistory& h = vehicle_history(s.vehicle_id, now_us);
+  if (h.have_state && s.t_us == h.state_t_us) return reject(RejectReason::kDuplicate);
+  if (h.have_state && s.t_us < h.state_t_us) return reject(RejectReason::kOutOfOrder);
+  h.have_state = true;
+  h.state_t_us = s.t_us;
   return Verdict{true, RejectReason::kNotFinite};
 }
 #endif

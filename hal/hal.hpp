@@ -42,6 +42,18 @@ class GnssSource {
   virtual bool finished() const = 0;
 };
 
+// Broadcast states of neighbour vehicles in arrival order (docs/dataset-format.md
+// "neighbours.csv"); on a vehicle they arrive over CAN (UWBNAV_Coop*), which
+// the firmware decodes itself: this source is for boards that have them otherwise.
+class NeighbourSource {
+ public:
+  virtual ~NeighbourSource() = default;
+  // Pops the oldest pending state that has arrived by up_to_us (rx_t_us <= up_to_us).
+  // Same status contract as ImuSource::poll.
+  [[nodiscard]] virtual Status poll(uint64_t up_to_us, NeighbourState& out) = 0;
+  virtual bool finished() const = 0;
+};
+
 // Classical CAN / CAN FD frame as it crosses the bus.
 struct CanFrame {
   static constexpr uint8_t kFlagExtended = 0x01;  // 29-bit identifier
@@ -125,6 +137,7 @@ struct Board {
   ParamStore& params;
   const SiteConfig& site;
   GnssSource* gnss = nullptr;  // optional: null on a vehicle without a GNSS receiver
+  NeighbourSource* neighbours = nullptr;  // optional: null when neighbour states come only over CAN
 };
 
 }  // namespace uwbnav::hal

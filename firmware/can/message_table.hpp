@@ -9,9 +9,13 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "estimator/params.hpp"  // UWBNAV_COOP
+
 namespace uwbnav::can {
 
-// 11-bit identifiers (docs/can.md). Outputs 0x100..0x106, HIL inputs 0x0A0..0x0B1.
+// 11-bit identifiers (docs/can.md). Outputs 0x100..0x106, HIL inputs 0x0A0..0x0B1;
+// with cooperative positioning (UWBNAV_COOP) this vehicle's state 0x110..0x115
+// and neighbour states from the V2X gateway 0x0C0..0x0C5.
 enum class MsgId : uint16_t {
   kNavTime = 0x100,      // output: time of the solution the 10 ms group belongs to
   kPosXY = 0x101,        // output: horizontal position + status
@@ -25,6 +29,22 @@ enum class MsgId : uint16_t {
   kHilImuGyro = 0x0A2,   // HIL input: IMU angular rate
   kHilUwbRange = 0x0B0,  // HIL input: UWB range, anchor, tag
   kHilUwbTime = 0x0B1,   // HIL input: UWB range timestamp + channel powers
+#if UWBNAV_COOP
+  // Cooperative positioning (issue 16 item 1): one vehicle state in six frames
+  // with the same alive counter; the two groups have the identical layout.
+  kCoopTime = 0x110,       // output: this vehicle's state, part 1 (id, time of validity, flags)
+  kCoopPosX = 0x111,       // output: part 2 (tag x, vx)
+  kCoopPosY = 0x112,       // output: part 3 (tag y, vy)
+  kCoopPosZ = 0x113,       // output: part 4 (tag z, vz)
+  kCoopSigma = 0x114,      // output: part 5 (position 1-sigmas)
+  kCoopCorr = 0x115,       // output: part 6 (position correlations)
+  kNeighbourTime = 0x0C0,  // input from the V2X gateway: another vehicle's state, part 1
+  kNeighbourPosX = 0x0C1,  // input: part 2
+  kNeighbourPosY = 0x0C2,  // input: part 3
+  kNeighbourPosZ = 0x0C3,  // input: part 4
+  kNeighbourSigma = 0x0C4, // input: part 5
+  kNeighbourCorr = 0x0C5,  // input: part 6
+#endif
 };
 
 constexpr uint32_t id_of(MsgId m) { return static_cast<uint32_t>(m); }
@@ -34,6 +54,10 @@ enum class NonFinite : uint8_t {
   kZeroFlagged = 0,  // raw for physical 0 (clipped into range), Saturated flag set
   kMaxFlagged,       // raw maximum (e.g. an unknown sigma is "worst"), Saturated flag set
   kRawZeroNa,        // raw 0 is the "not available" code; no flag; decodes to NaN
+#if UWBNAV_COOP
+  kRawMinNa,         // the field minimum (e.g. int16 0x8000) is the "not reported" code; no flag; decodes to
+                     // NaN. The signal's min lies above it, so clipping never produces the code.
+#endif
 };
 
 struct ValueName {
@@ -76,7 +100,8 @@ struct MessageDef {
   uint8_t dlc;           // bytes
   uint16_t data_id;      // E2E data ID (DBC attribute E2EDataID)
   uint16_t cycle_ms;     // nominal cycle (DBC GenMsgCycleTime), 0 = event driven
-  bool from_uwbnav;      // transmitter: true = UWBNAV node, false = HIL_RIG
+  const char* transmitter;  // DBC node sending it (BO_)
+  const char* receivers;    // DBC nodes receiving its signals (SG_), comma separated
   const char* comment;
   const SignalDef* signals;
   uint8_t num_signals;
@@ -88,6 +113,12 @@ constexpr uint8_t kSigCounter = 1;    // bits 8..11
 constexpr uint8_t kSigSaturated = 2;  // bit 15
 constexpr uint8_t kFirstPayloadSignal = 3;  // first signal after the header
 constexpr uint8_t kMaxSignals = 8;
+
+// DBC nodes (BU_).
+inline constexpr const char* kNodeUwbnav = "UWBNAV";
+inline constexpr const char* kNodeHilRig = "HIL_RIG";
+inline constexpr const char* kNodeV2xGw = "V2X_GW";
+inline constexpr const char* kOutputReceivers = "VEHICLE,HIL_RIG";
 
 // ---- The table (single source of truth; docs/can.md, docs/uwbnav.dbc) ---------
 
@@ -244,6 +275,83 @@ inline constexpr SignalDef kHilUwbTimeSignals[] = {
      NonFinite::kRawZeroNa, kPowerValues, 1},
 };
 
+#if UWBNAV_COOP
+// Cooperative positioning (docs/can.md "Cooperative positioning"): one vehicle
+// state in six frames, the same layout for this vehicle's output (UWBNAV_Coop*,
+// signals Coop_*) and the neighbour states the V2X gateway relays
+// (V2X_Neighbour*, signals Neighbour_*). M: header prefix, S: signal prefix.
+inline constexpr ValueName kCoopValidValues[] = {{0, "not_valid"}, {1, "valid"}};
+inline constexpr ValueName kNotReportedValues[] = {{-32768, "not_reported"}};
+
+#define UWBNAV_COOP_TIME_SIGNALS(M, S)                                                                   \
+  UWBNAV_CAN_HEADER(M "Time"),                                                                         \
+  {S "_Valid", 12, 1, false, 1.0, 0.0, 0.0, 1.0, "",                                                   \
+   "1 = the sender's solution is usable (status valid or degraded); 0 = do not use (a gateway may withdraw a vehicle): the receiver drops the state", \
+   NonFinite::kZeroFlagged, kCoopValidValues, 2},                                                      \
+  {S "_Cooperative", 13, 1, false, 1.0, 0.0, 0.0, 1.0, "",                                             \
+   "1 = the sender's own estimate used ranges to other vehicles recently (coop.dependent_hold): it is not independent of them", \
+   NonFinite::kZeroFlagged, nullptr, 0},                                                               \
+  {S "_VehicleId", 16, 16, false, 1.0, 0.0, 0.0, 65535.0, "",                                          \
+   "sending vehicle: 32768 + its coop.vehicle_id (32769..65534); its tag answers ranges with this id",  \
+   NonFinite::kZeroFlagged, nullptr, 0},                                                               \
+  {S "_TimeUs", 32, 32, false, 1.0, 0.0, 0.0, 4294967295.0, "us",                                      \
+   "time of validity of the state, low 32 bits of the common us time base (wraps every 71.6 min)",       \
+   NonFinite::kZeroFlagged, nullptr, 0}
+
+#define UWBNAV_COOP_AXIS_SIGNALS(M, S, AXIS, WHAT)                                                       \
+  UWBNAV_CAN_HEADER(M "Pos" AXIS),                                                                     \
+  {S "_Pos" AXIS, 16, 32, true, 0.001, 0.0, -2147483.648, 2147483.647, "m",                            \
+   "tag antenna " WHAT " in the navigation frame", NonFinite::kZeroFlagged, nullptr, 0},                \
+  {S "_Vel" AXIS, 48, 16, true, 0.01, 0.0, -327.67, 327.67, "m/s",                                     \
+   "tag velocity " WHAT ", navigation frame; raw -32768 = not reported", NonFinite::kRawMinNa,          \
+   kNotReportedValues, 1}
+
+#define UWBNAV_COOP_Z_SIGNALS(M, S)                                                                      \
+  UWBNAV_CAN_HEADER(M "PosZ"),                                                                         \
+  {S "_PosZ", 16, 25, true, 0.001, 0.0, -16777.216, 16777.215, "m",                                    \
+   "tag antenna z (up) in the navigation frame", NonFinite::kZeroFlagged, nullptr, 0},                  \
+  {S "_VelZ", 48, 16, true, 0.01, 0.0, -327.67, 327.67, "m/s",                                         \
+   "tag velocity z (up), navigation frame; raw -32768 = not reported", NonFinite::kRawMinNa,            \
+   kNotReportedValues, 1}
+
+#define UWBNAV_COOP_SIGMA_SIGNALS(M, S)                                                                  \
+  UWBNAV_CAN_HEADER(M "Sigma"),                                                                        \
+  {S "_SigmaX", 16, 16, false, 0.001, 0.0, 0.0, 65.535, "m", "claimed 1-sigma of the tag x (unknown: maximum)", \
+   NonFinite::kMaxFlagged, nullptr, 0},                                                                \
+  {S "_SigmaY", 32, 16, false, 0.001, 0.0, 0.0, 65.535, "m", "claimed 1-sigma of the tag y (unknown: maximum)", \
+   NonFinite::kMaxFlagged, nullptr, 0},                                                                \
+  {S "_SigmaZ", 48, 16, false, 0.001, 0.0, 0.0, 65.535, "m", "claimed 1-sigma of the tag z (unknown: maximum)", \
+   NonFinite::kMaxFlagged, nullptr, 0}
+
+#define UWBNAV_COOP_CORR_SIGNALS(M, S)                                                                   \
+  UWBNAV_CAN_HEADER(M "Corr"),                                                                         \
+  {S "_CorrXY", 16, 8, true, 1.0 / 127.0, 0.0, -1.0, 1.0, "", "correlation coefficient of the x and y position errors", \
+   NonFinite::kZeroFlagged, nullptr, 0},                                                               \
+  {S "_CorrXZ", 24, 8, true, 1.0 / 127.0, 0.0, -1.0, 1.0, "", "correlation coefficient of the x and z position errors", \
+   NonFinite::kZeroFlagged, nullptr, 0},                                                               \
+  {S "_CorrYZ", 32, 8, true, 1.0 / 127.0, 0.0, -1.0, 1.0, "", "correlation coefficient of the y and z position errors", \
+   NonFinite::kZeroFlagged, nullptr, 0}
+
+inline constexpr SignalDef kCoopTimeSignals[] = {UWBNAV_COOP_TIME_SIGNALS("Coop", "Coop")};
+inline constexpr SignalDef kCoopPosXSignals[] = {UWBNAV_COOP_AXIS_SIGNALS("Coop", "Coop", "X", "x")};
+inline constexpr SignalDef kCoopPosYSignals[] = {UWBNAV_COOP_AXIS_SIGNALS("Coop", "Coop", "Y", "y")};
+inline constexpr SignalDef kCoopPosZSignals[] = {UWBNAV_COOP_Z_SIGNALS("Coop", "Coop")};
+inline constexpr SignalDef kCoopSigmaSignals[] = {UWBNAV_COOP_SIGMA_SIGNALS("Coop", "Coop")};
+inline constexpr SignalDef kCoopCorrSignals[] = {UWBNAV_COOP_CORR_SIGNALS("Coop", "Coop")};
+inline constexpr SignalDef kNeighbourTimeSignals[] = {UWBNAV_COOP_TIME_SIGNALS("Neighbour", "Neighbour")};
+inline constexpr SignalDef kNeighbourPosXSignals[] = {UWBNAV_COOP_AXIS_SIGNALS("Neighbour", "Neighbour", "X", "x")};
+inline constexpr SignalDef kNeighbourPosYSignals[] = {UWBNAV_COOP_AXIS_SIGNALS("Neighbour", "Neighbour", "Y", "y")};
+inline constexpr SignalDef kNeighbourPosZSignals[] = {UWBNAV_COOP_Z_SIGNALS("Neighbour", "Neighbour")};
+inline constexpr SignalDef kNeighbourSigmaSignals[] = {UWBNAV_COOP_SIGMA_SIGNALS("Neighbour", "Neighbour")};
+inline constexpr SignalDef kNeighbourCorrSignals[] = {UWBNAV_COOP_CORR_SIGNALS("Neighbour", "Neighbour")};
+
+#undef UWBNAV_COOP_TIME_SIGNALS
+#undef UWBNAV_COOP_AXIS_SIGNALS
+#undef UWBNAV_COOP_Z_SIGNALS
+#undef UWBNAV_COOP_SIGMA_SIGNALS
+#undef UWBNAV_COOP_CORR_SIGNALS
+#endif  // UWBNAV_COOP
+
 #undef UWBNAV_CAN_HEADER
 
 template <size_t N>
@@ -258,38 +366,75 @@ constexpr uint16_t data_id_for(MsgId id) { return static_cast<uint16_t>(0x1000U 
 }  // namespace table
 
 inline constexpr MessageDef kMessages[] = {
-    {id_of(MsgId::kNavTime), "UWBNAV_NavTime", 8, table::data_id_for(MsgId::kNavTime), 10, true,
+    {id_of(MsgId::kNavTime), "UWBNAV_NavTime", 8, table::data_id_for(MsgId::kNavTime), 10, kNodeUwbnav, kOutputReceivers,
      "Opens each 10 ms output group: the estimator time of the solution. PosXY, PosZ, VelHdg sent in the same cycle carry the same alive counter.",
      table::kNavTimeSignals, table::count_of(table::kNavTimeSignals)},
-    {id_of(MsgId::kPosXY), "UWBNAV_PosXY", 8, table::data_id_for(MsgId::kPosXY), 10, true,
+    {id_of(MsgId::kPosXY), "UWBNAV_PosXY", 8, table::data_id_for(MsgId::kPosXY), 10, kNodeUwbnav, kOutputReceivers,
      "Horizontal position of the body origin in the anchor frame, 1 mm, and the solution status.",
      table::kPosXYSignals, table::count_of(table::kPosXYSignals)},
-    {id_of(MsgId::kPosZ), "UWBNAV_PosZ", 8, table::data_id_for(MsgId::kPosZ), 10, true,
+    {id_of(MsgId::kPosZ), "UWBNAV_PosZ", 8, table::data_id_for(MsgId::kPosZ), 10, kNodeUwbnav, kOutputReceivers,
      "Vertical position and velocity, solution status, UWB ranges fused and rejected since the previous output.",
      table::kPosZSignals, table::count_of(table::kPosZSignals)},
-    {id_of(MsgId::kVelHdg), "UWBNAV_VelHdg", 8, table::data_id_for(MsgId::kVelHdg), 10, true,
+    {id_of(MsgId::kVelHdg), "UWBNAV_VelHdg", 8, table::data_id_for(MsgId::kVelHdg), 10, kNodeUwbnav, kOutputReceivers,
      "Horizontal velocity in the navigation frame and heading.", table::kVelHdgSignals, table::count_of(table::kVelHdgSignals)},
-    {id_of(MsgId::kAccuracy), "UWBNAV_Accuracy", 8, table::data_id_for(MsgId::kAccuracy), 20, true,
+    {id_of(MsgId::kAccuracy), "UWBNAV_Accuracy", 8, table::data_id_for(MsgId::kAccuracy), 20, kNodeUwbnav, kOutputReceivers,
      "Claimed 1-sigma position accuracy and x/y correlation (cycle: parameter can.accuracy_period_ms, default 20 ms).",
      table::kAccuracySignals, table::count_of(table::kAccuracySignals)},
-    {id_of(MsgId::kDiag), "UWBNAV_Diag", 8, table::data_id_for(MsgId::kDiag), 100, true,
+    {id_of(MsgId::kDiag), "UWBNAV_Diag", 8, table::data_id_for(MsgId::kDiag), 100, kNodeUwbnav, kOutputReceivers,
      "Diagnostics: per-anchor NLOS decisions, loop overruns, input rejects, filter resets.",
      table::kDiagSignals, table::count_of(table::kDiagSignals)},
-    {id_of(MsgId::kAttitude), "UWBNAV_Attitude", 8, table::data_id_for(MsgId::kAttitude), 20, true,
+    {id_of(MsgId::kAttitude), "UWBNAV_Attitude", 8, table::data_id_for(MsgId::kAttitude), 20, kNodeUwbnav, kOutputReceivers,
      "Heading accuracy and the attitude's roll and pitch (sent with UWBNAV_Accuracy: parameter can.accuracy_period_ms).",
      table::kAttitudeSignals, table::count_of(table::kAttitudeSignals)},
-    {id_of(MsgId::kHilImuTime), "HIL_ImuTime", 8, table::data_id_for(MsgId::kHilImuTime), 10, false,
+    {id_of(MsgId::kHilImuTime), "HIL_ImuTime", 8, table::data_id_for(MsgId::kHilImuTime), 10, kNodeHilRig, kNodeUwbnav,
      "HIL input, IMU sample part 1 of 3 (time). The three parts of one sample carry the same alive counter.",
      table::kHilImuTimeSignals, table::count_of(table::kHilImuTimeSignals)},
-    {id_of(MsgId::kHilImuAccel), "HIL_ImuAccel", 8, table::data_id_for(MsgId::kHilImuAccel), 10, false,
+    {id_of(MsgId::kHilImuAccel), "HIL_ImuAccel", 8, table::data_id_for(MsgId::kHilImuAccel), 10, kNodeHilRig, kNodeUwbnav,
      "HIL input, IMU sample part 2 of 3 (specific force).", table::kHilImuAccelSignals, table::count_of(table::kHilImuAccelSignals)},
-    {id_of(MsgId::kHilImuGyro), "HIL_ImuGyro", 8, table::data_id_for(MsgId::kHilImuGyro), 10, false,
+    {id_of(MsgId::kHilImuGyro), "HIL_ImuGyro", 8, table::data_id_for(MsgId::kHilImuGyro), 10, kNodeHilRig, kNodeUwbnav,
      "HIL input, IMU sample part 3 of 3 (angular rate).", table::kHilImuGyroSignals, table::count_of(table::kHilImuGyroSignals)},
-    {id_of(MsgId::kHilUwbRange), "HIL_UwbRange", 8, table::data_id_for(MsgId::kHilUwbRange), 0, false,
+    {id_of(MsgId::kHilUwbRange), "HIL_UwbRange", 8, table::data_id_for(MsgId::kHilUwbRange), 0, kNodeHilRig, kNodeUwbnav,
      "HIL input, UWB range part 1 of 2 (anchor, tag, range). Both parts carry the same alive counter.",
      table::kHilUwbRangeSignals, table::count_of(table::kHilUwbRangeSignals)},
-    {id_of(MsgId::kHilUwbTime), "HIL_UwbTime", 8, table::data_id_for(MsgId::kHilUwbTime), 0, false,
+    {id_of(MsgId::kHilUwbTime), "HIL_UwbTime", 8, table::data_id_for(MsgId::kHilUwbTime), 0, kNodeHilRig, kNodeUwbnav,
      "HIL input, UWB range part 2 of 2 (time, channel powers).", table::kHilUwbTimeSignals, table::count_of(table::kHilUwbTimeSignals)},
+#if UWBNAV_COOP
+#define UWBNAV_COOP_MESSAGE(ID, NAME, CYCLE, TX, RX, COMMENT, SIGNALS) \
+  {id_of(MsgId::ID), NAME, 8, table::data_id_for(MsgId::ID), CYCLE, TX, RX, COMMENT, table::SIGNALS, table::count_of(table::SIGNALS)}
+    UWBNAV_COOP_MESSAGE(kCoopTime, "UWBNAV_CoopTime", 100, kNodeUwbnav, kNodeV2xGw,
+                        "Cooperative positioning: this vehicle's tag state for the V2X gateway, part 1 of 6 (flags, vehicle id, "
+                        "time of validity). The six parts of one state are sent in order in one cycle with the same alive counter, "
+                        "every can.coop_period_ms (default 100 ms) while coop.vehicle_id > 0 and the status is valid or degraded.",
+                        kCoopTimeSignals),
+    UWBNAV_COOP_MESSAGE(kCoopPosX, "UWBNAV_CoopPosX", 100, kNodeUwbnav, kNodeV2xGw,
+                        "Cooperative positioning, this vehicle's state part 2 of 6: tag x and vx.", kCoopPosXSignals),
+    UWBNAV_COOP_MESSAGE(kCoopPosY, "UWBNAV_CoopPosY", 100, kNodeUwbnav, kNodeV2xGw,
+                        "Cooperative positioning, this vehicle's state part 3 of 6: tag y and vy.", kCoopPosYSignals),
+    UWBNAV_COOP_MESSAGE(kCoopPosZ, "UWBNAV_CoopPosZ", 100, kNodeUwbnav, kNodeV2xGw,
+                        "Cooperative positioning, this vehicle's state part 4 of 6: tag z and vz.", kCoopPosZSignals),
+    UWBNAV_COOP_MESSAGE(kCoopSigma, "UWBNAV_CoopSigma", 100, kNodeUwbnav, kNodeV2xGw,
+                        "Cooperative positioning, this vehicle's state part 5 of 6: position 1-sigmas (covariance diagonal).",
+                        kCoopSigmaSignals),
+    UWBNAV_COOP_MESSAGE(kCoopCorr, "UWBNAV_CoopCorr", 100, kNodeUwbnav, kNodeV2xGw,
+                        "Cooperative positioning, this vehicle's state part 6 of 6: position correlation coefficients.",
+                        kCoopCorrSignals),
+    UWBNAV_COOP_MESSAGE(kNeighbourTime, "V2X_NeighbourTime", 0, kNodeV2xGw, kNodeUwbnav,
+                        "Cooperative positioning: another vehicle's tag state relayed by the V2X gateway, part 1 of 6 (layout of "
+                        "UWBNAV_CoopTime). The six parts of one state carry the same alive counter; the gateway sends a whole "
+                        "group before the next one. Decoded, validated, then ranges to that vehicle's tag are fused.",
+                        kNeighbourTimeSignals),
+    UWBNAV_COOP_MESSAGE(kNeighbourPosX, "V2X_NeighbourPosX", 0, kNodeV2xGw, kNodeUwbnav,
+                        "Neighbour vehicle state part 2 of 6: tag x and vx.", kNeighbourPosXSignals),
+    UWBNAV_COOP_MESSAGE(kNeighbourPosY, "V2X_NeighbourPosY", 0, kNodeV2xGw, kNodeUwbnav,
+                        "Neighbour vehicle state part 3 of 6: tag y and vy.", kNeighbourPosYSignals),
+    UWBNAV_COOP_MESSAGE(kNeighbourPosZ, "V2X_NeighbourPosZ", 0, kNodeV2xGw, kNodeUwbnav,
+                        "Neighbour vehicle state part 4 of 6: tag z and vz.", kNeighbourPosZSignals),
+    UWBNAV_COOP_MESSAGE(kNeighbourSigma, "V2X_NeighbourSigma", 0, kNodeV2xGw, kNodeUwbnav,
+                        "Neighbour vehicle state part 5 of 6: position 1-sigmas.", kNeighbourSigmaSignals),
+    UWBNAV_COOP_MESSAGE(kNeighbourCorr, "V2X_NeighbourCorr", 0, kNodeV2xGw, kNodeUwbnav,
+                        "Neighbour vehicle state part 6 of 6: position correlation coefficients.", kNeighbourCorrSignals),
+#undef UWBNAV_COOP_MESSAGE
+#endif
 };
 
 inline constexpr size_t kNumMessages = sizeof(kMessages) / sizeof(kMessages[0]);

@@ -19,6 +19,11 @@ static_assert(std::numeric_limits<float>::is_iec559, "raw_from_phys decodes IEEE
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr int64_t kScaledRawLimit = int64_t{1} << 24;  // raw (and raw - raw_zero) exact in float
+#if UWBNAV_COOP
+// Wide signals (the cooperative positions, 32 bit): raw - raw_zero up to 2^31,
+// decoded by an exact integer division (quotient_nearest) instead of in float.
+constexpr int64_t kWideRawLimit = int64_t{1} << 31;
+#endif
 
 constexpr double abs_d(double v) { return v < 0.0 ? -v : v; }
 
@@ -38,17 +43,42 @@ constexpr bool is_count(const SignalDef& s) {
          s.max == static_cast<double>(field_max(s));
 }
 
-// 'p': a scaled physical value. 1/factor and offset/factor are integers (so the
-// integer formula of SignalLayout is exact), and every raw value of the field
-// minus raw_zero is exact in float (so decoding is one correctly rounded division).
-constexpr bool is_scaled(const SignalDef& s) {
+// A "not reported" code outside the signal's clipping range (kRawMinNa: the
+// field minimum, below the raw value of min) never collides with a value.
+constexpr bool na_code_ok(const SignalDef& s) {
+#if UWBNAV_COOP
+  if (s.non_finite == NonFinite::kRawMinNa) return s.is_signed && raw_of(s, s.min) > field_min(s);
+#endif
+  static_cast<void>(s);
+  return true;
+}
+
+// 1/factor and offset/factor are integers (so the integer formula of
+// SignalLayout is exact) and every raw value of the field minus raw_zero lies
+// within +-limit.
+constexpr bool is_scaled_within(const SignalDef& s, int64_t limit) {
   const int64_t inv = inv_factor_of(s);
   const int64_t zero = raw_zero_of(s);
   const double zero_exact = -s.offset * static_cast<double>(inv);
   return inv >= 1 && inv <= 65535 && abs_d(1.0 / s.factor - static_cast<double>(inv)) <= 1e-9 * static_cast<double>(inv) &&
          abs_d(zero_exact - static_cast<double>(zero)) <= 1e-9 && zero >= -32768 && zero <= 32767 &&
          raw_of(s, s.min) <= raw_of(s, s.max) && raw_of(s, s.min) >= field_min(s) && raw_of(s, s.max) <= field_max(s) &&
-         field_min(s) - zero >= -kScaledRawLimit && field_max(s) - zero <= kScaledRawLimit;
+         field_min(s) - zero >= -limit && field_max(s) - zero <= limit && na_code_ok(s);
+}
+
+// 'p': a scaled physical value whose raw values minus raw_zero are all exact
+// in float (so decoding is one correctly rounded float division).
+constexpr bool is_scaled(const SignalDef& s) { return is_scaled_within(s, kScaledRawLimit); }
+
+// 'w': a wide scaled value (at most 32 bits, |raw - raw_zero| up to 2^31):
+// encoded like 'p', decoded by an exact integer division (quotient_nearest).
+constexpr bool is_wide(const SignalDef& s) {
+#if UWBNAV_COOP
+  return !is_scaled(s) && s.bit_len <= 32 && is_scaled_within(s, kWideRawLimit);
+#else
+  static_cast<void>(s);
+  return false;
+#endif
 }
 
 // 'a': a scaled angle [rad] with offset 0 whose raw limits hold every wrapped angle.
@@ -81,7 +111,10 @@ constexpr bool kinds_are(MsgId id, const char* kinds) {
     if (k >= m.num_signals) return false;
     const SignalDef& s = m.signals[k];
     const char c = kinds[k - kFirstPayloadSignal];
-    if (!((c == 'c' && is_count(s)) || (c == 'p' && is_scaled(s)) || (c == 'a' && is_angle(s)))) return false;
+    if (!((c == 'c' && is_count(s)) || (c == 'p' && is_scaled(s)) || (c == 'w' && is_wide(s)) ||
+          (c == 'a' && is_angle(s)))) {
+      return false;
+    }
   }
   return k == m.num_signals;
 }
@@ -101,7 +134,7 @@ struct Layouts {
 
 constexpr SignalLayout layout_from(const SignalDef& s) {
   SignalLayout l{};
-  const bool scaled = is_scaled(s);
+  const bool scaled = is_scaled(s) || is_wide(s);
   l.raw_min = scaled ? static_cast<int32_t>(raw_of(s, s.min)) : 0;
   l.raw_max = scaled ? static_cast<int32_t>(raw_of(s, s.max)) : 0;
   l.inv_factor = static_cast<uint16_t>(inv_factor_of(s));
@@ -182,6 +215,44 @@ constexpr float kPiBelowF = 3.14159250F;
 static_assert(static_cast<double>(kPiBelowF) < kPi && static_cast<double>(kPiBelowF) + 0x1p-22 > kPi,
               "kPiBelowF must be the float just below pi (ulp 2^-22 in [2, 4))");
 
+#if UWBNAV_COOP
+// The float nearest to n / d (ties to even), for a wide signal's
+// raw - raw_zero = n (|n| <= 2^31) and d = 1 / factor: the integer quotient to
+// 47+ bits with a sticky remainder, rounded once to 24 bits. Exact like the
+// float division of the narrow signals, which cannot be used here because n
+// itself may not be a float.
+float quotient_nearest(int64_t n, uint32_t d) {
+  if (n == 0) return 0.0F;
+  const bool negative = n < 0;
+  uint64_t m = negative ? 0U - static_cast<uint64_t>(n) : static_cast<uint64_t>(n);
+  int shift = 0;
+  while ((m >> 62) == 0) {  // normalise: bit 62 is the top bit
+    m <<= 1;
+    ++shift;
+  }
+  const uint64_t q = m / d;  // >= 2^62 / 2^16: at least 47 significant bits
+  const bool sticky = m % d != 0;
+  int top = 62;
+  while ((q >> top) == 0) --top;
+  int drop = top - 23;  // keep 24 significant bits
+  uint64_t keep = q >> drop;
+  const uint64_t rest = q & ((uint64_t{1} << drop) - 1U);
+  const uint64_t half = uint64_t{1} << (drop - 1);
+  if (rest > half || (rest == half && (sticky || (keep & 1U) != 0))) ++keep;
+  if (keep == (uint64_t{1} << 24)) {
+    keep >>= 1;
+    ++drop;
+  }
+  // value = keep * 2^(drop - shift), keep in [2^23, 2^24): a normal float
+  // (|n / d| >= 2^-16), biased exponent drop - shift + 150.
+  const uint32_t bits = (negative ? 0x80000000U : 0U) |
+                        (static_cast<uint32_t>(drop - shift + 150) << 23) | (static_cast<uint32_t>(keep) & 0x7FFFFFU);
+  float v = 0.0F;
+  std::memcpy(&v, &bits, sizeof v);
+  return v;
+}
+#endif
+
 }  // namespace
 
 const MessageLayout& layout_of(MsgId id) { return *find_layout(id_of(id)); }
@@ -205,6 +276,10 @@ int64_t raw_from_phys(const SignalLayout& s, float phys, bool* flagged) {
       case NonFinite::kMaxFlagged:
         *flagged = true;
         return s.raw_max;
+#if UWBNAV_COOP
+      case NonFinite::kRawMinNa:
+        return -(int64_t{1} << (s.bit_len - 1));
+#endif
       case NonFinite::kZeroFlagged:
         break;
     }
@@ -218,7 +293,7 @@ int64_t raw_from_phys(const SignalLayout& s, float phys, bool* flagged) {
   const int64_t signed_scaled = p.negative ? -scaled : scaled;
   int64_t raw = s.raw_zero;
   if (p.exponent >= 0) {
-    // mantissa >= 2^23 here: beyond 2^20 the value exceeds every raw limit (2^24).
+    // mantissa >= 2^23 here: beyond 2^20 the value exceeds every raw limit (2^24, wide 2^31).
     if (p.exponent > 20) return clip(s, p.negative ? INT64_MIN / 2 : INT64_MAX / 2, flagged);
     raw = signed_scaled * (int64_t{1} << p.exponent) + s.raw_zero;
   } else if (p.exponent >= -41) {
@@ -259,6 +334,14 @@ int64_t raw_from_count(const SignalLayout& s, uint64_t count, bool* flagged) {
 
 float phys_from_raw(const SignalLayout& s, int64_t raw) {
   if (s.non_finite == NonFinite::kRawZeroNa && raw == 0) return std::numeric_limits<float>::quiet_NaN();
+#if UWBNAV_COOP
+  if (s.non_finite == NonFinite::kRawMinNa && raw == -(int64_t{1} << (s.bit_len - 1))) {
+    return std::numeric_limits<float>::quiet_NaN();
+  }
+  if (raw - s.raw_zero > kScaledRawLimit || raw - s.raw_zero < -kScaledRawLimit) {
+    return quotient_nearest(raw - s.raw_zero, s.inv_factor);  // wide signal
+  }
+#endif
   // |raw - raw_zero| <= 2^24 for scaled signals: exact in float.
   return static_cast<float>(static_cast<int32_t>(raw - s.raw_zero)) / static_cast<float>(s.inv_factor);
 }
@@ -281,6 +364,12 @@ void put_bits(uint8_t* data, uint8_t start_bit, uint8_t bit_len, uint64_t raw) {
       data[bit / 8] = static_cast<uint8_t>(data[bit / 8] & ~mask);
     }
   }
+}
+
+uint64_t unwrap_time_us(uint32_t t32_us, uint64_t ref_us) {
+  const auto delta = static_cast<int32_t>(t32_us - static_cast<uint32_t>(ref_us));
+  if (delta < 0 && static_cast<uint64_t>(-static_cast<int64_t>(delta)) > ref_us) return t32_us;
+  return static_cast<uint64_t>(static_cast<int64_t>(ref_us) + delta);
 }
 
 uint64_t get_bits(const uint8_t* data, uint8_t start_bit, uint8_t bit_len) {
@@ -373,7 +462,79 @@ static_assert(kinds_are(MsgId::kHilImuAccel, "ppp"));
 static_assert(kinds_are(MsgId::kHilImuGyro, "ppp"));
 static_assert(kinds_are(MsgId::kHilUwbRange, "ccp"));
 static_assert(kinds_are(MsgId::kHilUwbTime, "cpp"));
+#if UWBNAV_COOP
+static_assert(kinds_are(MsgId::kCoopTime, "cccc"));
+static_assert(kinds_are(MsgId::kCoopPosX, "wp"));
+static_assert(kinds_are(MsgId::kCoopPosY, "wp"));
+static_assert(kinds_are(MsgId::kCoopPosZ, "pp"));
+static_assert(kinds_are(MsgId::kCoopSigma, "ppp"));
+static_assert(kinds_are(MsgId::kCoopCorr, "ppp"));
+static_assert(kNumMessages == 24, "a new message needs its kinds_are() line and typed encode/decode");
+
+// The two cooperative groups have the identical layout, part by part, and
+// their ids are consecutive in part order (coop_id()).
+constexpr bool same_layout(MsgId a, MsgId b) {
+  const MessageDef& x = kMessages[index_of(a)];
+  const MessageDef& y = kMessages[index_of(b)];
+  if (x.num_signals != y.num_signals || x.dlc != y.dlc) return false;
+  for (uint8_t k = 0; k < x.num_signals; ++k) {
+    const SignalDef& p = x.signals[k];
+    const SignalDef& q = y.signals[k];
+    if (p.start_bit != q.start_bit || p.bit_len != q.bit_len || p.is_signed != q.is_signed || p.factor != q.factor ||
+        p.offset != q.offset || p.min != q.min || p.max != q.max || p.non_finite != q.non_finite) {
+      return false;
+    }
+  }
+  return true;
+}
+constexpr MsgId kCoopParts[2][kCoopFrames] = {
+    {MsgId::kCoopTime, MsgId::kCoopPosX, MsgId::kCoopPosY, MsgId::kCoopPosZ, MsgId::kCoopSigma, MsgId::kCoopCorr},
+    {MsgId::kNeighbourTime, MsgId::kNeighbourPosX, MsgId::kNeighbourPosY, MsgId::kNeighbourPosZ,
+     MsgId::kNeighbourSigma, MsgId::kNeighbourCorr}};
+constexpr bool coop_groups_consistent() {
+  for (size_t k = 0; k < kCoopFrames; ++k) {
+    if (!same_layout(kCoopParts[0][k], kCoopParts[1][k])) return false;
+    if (id_of(kCoopParts[0][k]) != coop_id(CoopGroup::kOwn, k)) return false;
+    if (id_of(kCoopParts[1][k]) != coop_id(CoopGroup::kNeighbour, k)) return false;
+  }
+  return true;
+}
+static_assert(coop_groups_consistent(), "UWBNAV_Coop* and V2X_Neighbour* must share one layout");
+
+// Index of each group part in kLayouts.messages.
+constexpr size_t kCoopIndex[2][kCoopFrames] = {
+    {index_of(MsgId::kCoopTime), index_of(MsgId::kCoopPosX), index_of(MsgId::kCoopPosY), index_of(MsgId::kCoopPosZ),
+     index_of(MsgId::kCoopSigma), index_of(MsgId::kCoopCorr)},
+    {index_of(MsgId::kNeighbourTime), index_of(MsgId::kNeighbourPosX), index_of(MsgId::kNeighbourPosY),
+     index_of(MsgId::kNeighbourPosZ), index_of(MsgId::kNeighbourSigma), index_of(MsgId::kNeighbourCorr)}};
+
+const MessageLayout& coop_layout(CoopGroup g, size_t part) {
+  return kLayouts.messages[kCoopIndex[static_cast<size_t>(g)][part]];
+}
+
+float component(const Vec3f& v, size_t axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
+void set_component(Vec3f& v, size_t axis, float value) {
+  if (axis == 0) {
+    v.x = value;
+  } else if (axis == 1) {
+    v.y = value;
+  } else {
+    v.z = value;
+  }
+}
+
+// Correlation coefficient of a covariance entry, clamped to [-1, 1]; 0 when a
+// sigma is 0 or not finite (the sigma itself is then sent flagged), NaN (sent
+// flagged) when the entry is not finite.
+float correlation(float cov, float sigma_a, float sigma_b) {
+  if (!std::isfinite(cov)) return std::numeric_limits<float>::quiet_NaN();
+  const float den = sigma_a * sigma_b;
+  if (!(den > 0.0F) || !std::isfinite(den)) return 0.0F;
+  return std::fmin(std::fmax(cov / den, -1.0F), 1.0F);
+}
+#else
 static_assert(kNumMessages == 12, "a new message needs its kinds_are() line and typed encode/decode");
+#endif
 
 NavStatus status_from(uint64_t v) { return static_cast<NavStatus>(v & 0x3U); }
 
@@ -607,5 +768,128 @@ Status decode(const hal::CanFrame& f, HilUwbTimeMsg& m, FrameMeta* meta) {
   }
   return s;
 }
+
+#if UWBNAV_COOP
+bool encode_coop_part(const CoopParts& p, CoopGroup g, size_t part, uint8_t counter, hal::CanFrame& out) {
+  if (part >= kCoopFrames) part = kCoopFrames - 1;  // callers pass 0..5
+  Packer pk(coop_layout(g, part), out);
+  switch (part) {
+    case 0:
+      pk.count(p.valid ? 1U : 0U);
+      pk.count(p.cooperative ? 1U : 0U);
+      pk.count(p.vehicle_id);
+      pk.count(p.t_sensor_us);
+      break;
+    case 1:
+    case 2:
+    case 3:
+      pk.phys(component(p.pos_nav_m, part - 1));
+      pk.phys(component(p.vel_nav_mps, part - 1));
+      break;
+    case 4:
+      pk.phys(p.sigma_m.x);
+      pk.phys(p.sigma_m.y);
+      pk.phys(p.sigma_m.z);
+      break;
+    default:
+      pk.phys(p.corr_xy);
+      pk.phys(p.corr_xz);
+      pk.phys(p.corr_yz);
+      break;
+  }
+  return pk.finish(counter);
+}
+
+Status decode_coop_part(const hal::CanFrame& f, CoopGroup g, size_t part, CoopParts& p, FrameMeta* meta) {
+  if (part >= kCoopFrames) return Status::kInvalidArgument;
+  Unpacker u(coop_layout(g, part), f);
+  const Status s = u.check(meta);
+  if (s != Status::kOk) return s;
+  switch (part) {
+    case 0:
+      p.valid = u.count() != 0;
+      p.cooperative = u.count() != 0;
+      p.vehicle_id = static_cast<uint16_t>(u.count());
+      p.t_sensor_us = static_cast<uint32_t>(u.count());
+      break;
+    case 1:
+    case 2:
+    case 3:
+      set_component(p.pos_nav_m, part - 1, u.phys());
+      set_component(p.vel_nav_mps, part - 1, u.phys());
+      break;
+    case 4:
+      p.sigma_m.x = u.phys();
+      p.sigma_m.y = u.phys();
+      p.sigma_m.z = u.phys();
+      break;
+    default:
+      p.corr_xy = u.phys();
+      p.corr_xz = u.phys();
+      p.corr_yz = u.phys();
+      break;
+  }
+  return Status::kOk;
+}
+
+CoopParts coop_parts_from(const NeighbourState& s, bool valid) {
+  CoopParts p;
+  p.valid = valid;
+  p.cooperative = s.cooperative;
+  p.vehicle_id = s.vehicle_id;
+  p.t_sensor_us = static_cast<uint32_t>(s.t_us);
+  p.pos_nav_m = s.pos_nav_m;
+  p.vel_nav_mps = s.vel_nav_mps;
+  const float* c = s.cov_pos_m2;  // xx, xy, xz, yy, yz, zz
+  p.sigma_m = Vec3f{std::sqrt(c[0]), std::sqrt(c[3]), std::sqrt(c[5])};  // negative or NaN: NaN, sent flagged
+  p.corr_xy = correlation(c[1], p.sigma_m.x, p.sigma_m.y);
+  p.corr_xz = correlation(c[2], p.sigma_m.x, p.sigma_m.z);
+  p.corr_yz = correlation(c[4], p.sigma_m.y, p.sigma_m.z);
+  return p;
+}
+
+NeighbourState neighbour_state_from(const CoopParts& p, uint64_t now_us) {
+  NeighbourState s;
+  s.t_us = unwrap_time_us(p.t_sensor_us, now_us);
+  s.rx_t_us = now_us;
+  s.vehicle_id = p.vehicle_id;
+  s.pos_nav_m = p.pos_nav_m;
+  s.vel_nav_mps = p.vel_nav_mps;
+  s.cooperative = p.cooperative;
+  const Vec3f& sg = p.sigma_m;
+  s.cov_pos_m2[0] = sg.x * sg.x;
+  s.cov_pos_m2[1] = p.corr_xy * sg.x * sg.y;
+  s.cov_pos_m2[2] = p.corr_xz * sg.x * sg.z;
+  s.cov_pos_m2[3] = sg.y * sg.y;
+  s.cov_pos_m2[4] = p.corr_yz * sg.y * sg.z;
+  s.cov_pos_m2[5] = sg.z * sg.z;
+  return s;
+}
+
+bool encode_coop(const NeighbourState& s, CoopGroup g, uint8_t counter, hal::CanFrame (&out)[kCoopFrames], bool valid) {
+  const CoopParts p = coop_parts_from(s, valid);
+  bool saturated = false;
+  for (size_t k = 0; k < kCoopFrames; ++k) saturated = encode_coop_part(p, g, k, counter, out[k]) || saturated;
+  return saturated;
+}
+
+Status decode_coop(const hal::CanFrame (&in)[kCoopFrames], CoopGroup g, uint64_t now_us, NeighbourState& out,
+                   CoopMeta* meta) {
+  CoopParts p;
+  CoopMeta m;
+  for (size_t k = 0; k < kCoopFrames; ++k) {
+    FrameMeta fm;
+    const Status s = decode_coop_part(in[k], g, k, p, &fm);
+    if (s != Status::kOk) return s;
+    if (k > 0 && fm.counter != m.counter) return Status::kRejected;
+    m.counter = fm.counter;
+    m.saturated = m.saturated || fm.saturated;
+  }
+  m.valid = p.valid;
+  out = neighbour_state_from(p, now_us);
+  if (meta != nullptr) *meta = m;
+  return Status::kOk;
+}
+#endif  // UWBNAV_COOP
 
 }  // namespace uwbnav::can

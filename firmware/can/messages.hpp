@@ -65,6 +65,11 @@ float phys_from_raw(const SignalLayout& s, int64_t raw);
 // Raw value of signal `s` in a payload, sign-extended for signed signals.
 int64_t read_raw(const SignalLayout& s, const uint8_t* data);
 
+// Reconstructs a 64-bit time from its low 32 bits: the value congruent to
+// t32_us (mod 2^32) nearest to ref_us (the receiver's clock). Exact while the
+// sensor time is within +-35.7 min of ref_us; never negative.
+uint64_t unwrap_time_us(uint32_t t32_us, uint64_t ref_us);
+
 // Writes/reads raw bits (Intel order) into/from an 8..64 byte payload.
 void put_bits(uint8_t* data, uint8_t start_bit, uint8_t bit_len, uint64_t raw);
 uint64_t get_bits(const uint8_t* data, uint8_t start_bit, uint8_t bit_len);
@@ -162,5 +167,76 @@ bool encode(const HilUwbTimeMsg& m, uint8_t counter, hal::CanFrame& out);
 [[nodiscard]] Status decode(const hal::CanFrame& f, HilImuGyroMsg& m, FrameMeta* meta = nullptr);
 [[nodiscard]] Status decode(const hal::CanFrame& f, HilUwbRangeMsg& m, FrameMeta* meta = nullptr);
 [[nodiscard]] Status decode(const hal::CanFrame& f, HilUwbTimeMsg& m, FrameMeta* meta = nullptr);
+
+#if UWBNAV_COOP
+// ---- Cooperative positioning (docs/can.md "Cooperative positioning") -------
+//
+// One vehicle state travels as a group of six frames with the same alive
+// counter, in part order: Time, PosX, PosY, PosZ, Sigma, Corr. Two groups have
+// this layout: UWBNAV_Coop* (0x110..0x115, this vehicle's state, sent) and
+// V2X_Neighbour* (0x0C0..0x0C5, other vehicles' states relayed by the V2X
+// gateway, received).
+enum class CoopGroup : uint8_t {
+  kOwn = 0,        // UWBNAV_Coop*
+  kNeighbour = 1,  // V2X_Neighbour*
+};
+
+constexpr size_t kCoopFrames = 6;
+
+// CAN id of part `part` (0..5) of a group.
+constexpr uint32_t coop_id(CoopGroup g, size_t part) {
+  return (g == CoopGroup::kOwn ? id_of(MsgId::kCoopTime) : id_of(MsgId::kNeighbourTime)) + static_cast<uint32_t>(part);
+}
+
+// The physical content of one group (what its six frames carry).
+struct CoopParts {
+  bool valid = false;        // Time: the sender's solution is usable (0: the receiver drops the state)
+  bool cooperative = false;  // Time: the sender's estimate used neighbour ranges recently
+  uint16_t vehicle_id = kNoVehicleId;  // Time: 0x8000 + the sender's coop.vehicle_id
+  uint32_t t_sensor_us = 0;  // Time: low 32 bits of the time of validity [us]
+  Vec3f pos_nav_m;           // PosX/PosY/PosZ: tag antenna [m]; x, y 1 mm +-2147 km, z 1 mm +-16777 m
+  Vec3f vel_nav_mps{kNaNf, kNaNf, kNaNf};  // PosX/PosY/PosZ: tag velocity [m/s], 0.01, +-327.67; NaN = not reported
+  Vec3f sigma_m{kNaNf, kNaNf, kNaNf};      // Sigma: 1-sigma [m], 1 mm, 0..65.535 (NaN: sent as the maximum, flagged)
+  float corr_xy = 0.0F;      // Corr: correlation coefficients [-1, 1], 1/127
+  float corr_xz = 0.0F;
+  float corr_yz = 0.0F;
+};
+
+// Encodes part `part` (0..5) of `p` into `out` (id of the group's part, len 8;
+// t_us untouched); returns the Saturated flag. decode_coop_part(): as the typed
+// decode() (kInvalidArgument also for a part > 5 or another id) and, on kOk,
+// fills only the fields of `p` that this part carries.
+bool encode_coop_part(const CoopParts& p, CoopGroup g, size_t part, uint8_t counter, hal::CanFrame& out);
+[[nodiscard]] Status decode_coop_part(const hal::CanFrame& f, CoopGroup g, size_t part, CoopParts& p,
+                                      FrameMeta* meta = nullptr);
+
+// NeighbourState -> group content: sigma = sqrt of the covariance diagonal,
+// correlation = cov_ab / (sigma_a sigma_b) clamped to [-1, 1] (0 when a sigma is
+// 0, NaN -> sent flagged when the off-diagonal is not finite); time truncated
+// to its low 32 bits.
+CoopParts coop_parts_from(const NeighbourState& s, bool valid);
+// Group content -> NeighbourState: t_us unwrapped from the 32-bit time against
+// now_us (unwrap_time_us), rx_t_us = now_us, covariance rebuilt as
+// sigma_a * sigma_b * rho_ab (diagonal sigma^2). `valid` is not part of the state.
+NeighbourState neighbour_state_from(const CoopParts& p, uint64_t now_us);
+
+// All six frames of one state with the same alive counter (quantised like every
+// signal: rounded half away from zero, clipped with the Saturated flag). Returns
+// true when any frame carries the Saturated flag (receivers drop such a state).
+bool encode_coop(const NeighbourState& s, CoopGroup g, uint8_t counter, hal::CanFrame (&out)[kCoopFrames],
+                 bool valid = true);
+
+struct CoopMeta {
+  uint8_t counter = 0;     // alive counter shared by the six frames
+  bool saturated = false;  // any frame flagged
+  bool valid = false;      // the Valid signal
+};
+
+// Decodes a complete group (frames in part order). kOk: `out` holds the state
+// (even when meta says saturated or not valid: the caller decides);
+// kRejected also when the six counters differ; otherwise as decode().
+[[nodiscard]] Status decode_coop(const hal::CanFrame (&in)[kCoopFrames], CoopGroup g, uint64_t now_us,
+                                 NeighbourState& out, CoopMeta* meta = nullptr);
+#endif  // UWBNAV_COOP
 
 }  // namespace uwbnav::can

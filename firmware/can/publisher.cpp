@@ -17,6 +17,19 @@ uint32_t period_us_from_ms(float ms) {
   return static_cast<uint32_t>(ticks < 1 ? 1 : ticks) * kCanTickUs;
 }
 
+// One frame to the bus driver, counted; never retried.
+void transmit(const hal::CanFrame& frame, bool saturated, hal::CanBus& bus, CanTxStats& stats) {
+  const Status s = bus.send(frame);
+  if (s == Status::kOk) {
+    ++stats.sent;
+    if (saturated) ++stats.saturated;
+  } else if (s == Status::kWouldBlock) {
+    ++stats.dropped;
+  } else {
+    ++stats.failed;
+  }
+}
+
 }  // namespace
 
 void CanDiag::set_anchor_nlos(int anchor_index, bool nlos) {
@@ -28,6 +41,12 @@ void CanDiag::set_anchor_nlos(int anchor_index, bool nlos) {
 void CanDiag::set_from_stats(const AppStats& stats) {
   loop_overruns = stats.loop.overruns;
   input_rejects = stats.imu.rejected_total() + stats.uwb.rejected_total() + stats.can_rx.rejected_total();
+#if UWBNAV_GNSS
+  input_rejects += stats.gnss.rejected_total();
+#endif
+#if UWBNAV_COOP
+  input_rejects += stats.neighbours.rejected_total();
+#endif
 }
 
 PosXYMsg pos_xy_from(const NavOutput& nav) {
@@ -84,12 +103,50 @@ DiagMsg diag_from(const CanDiag& diag) {
   return m;
 }
 
+#if UWBNAV_COOP
+NeighbourState coop_state_from(const NavOutput& nav, const Vec3f& tag_lever_body_m, uint16_t vehicle_id,
+                               bool cooperative) {
+  // R(q) * v = v + 2 w (u x v) + 2 u x (u x v), u = (x, y, z) of the unit quaternion.
+  const float w = nav.q_nav_body[0], ux = nav.q_nav_body[1], uy = nav.q_nav_body[2], uz = nav.q_nav_body[3];
+  const Vec3f& v = tag_lever_body_m;
+  const float cx = uy * v.z - uz * v.y, cy = uz * v.x - ux * v.z, cz = ux * v.y - uy * v.x;  // u x v
+  const float dx = uy * cz - uz * cy, dy = uz * cx - ux * cz, dz = ux * cy - uy * cx;        // u x (u x v)
+  NeighbourState s;
+  s.t_us = nav.t_us;
+  s.rx_t_us = nav.t_us;
+  s.vehicle_id = vehicle_id;
+  s.pos_nav_m = Vec3f{nav.pos_nav_m.x + v.x + 2.0F * (w * cx + dx), nav.pos_nav_m.y + v.y + 2.0F * (w * cy + dy),
+                      nav.pos_nav_m.z + v.z + 2.0F * (w * cz + dz)};
+  const Vec3f& sg = nav.pos_sigma_m;
+  s.cov_pos_m2[0] = sg.x * sg.x;
+  s.cov_pos_m2[1] = nav.pos_xy_corr * sg.x * sg.y;
+  s.cov_pos_m2[2] = 0.0F;
+  s.cov_pos_m2[3] = sg.y * sg.y;
+  s.cov_pos_m2[4] = 0.0F;
+  s.cov_pos_m2[5] = sg.z * sg.z;
+  s.vel_nav_mps = nav.vel_nav_mps;
+  s.cooperative = cooperative;
+  return s;
+}
+
+void CanPublisher::set_coop_state(const NeighbourState& s) {
+  coop_state_ = s;
+  coop_pending_ = true;
+}
+#endif
+
 void CanPublisher::configure(const Params& params) {
   enabled_ = params[ParamId::kCanTxEnable] >= 0.5F;
   pos_.period_us = period_us_from_ms(params[ParamId::kCanPosPeriodMs]);
   accuracy_.period_us = period_us_from_ms(params[ParamId::kCanAccPeriodMs]);
   diag_.period_us = period_us_from_ms(params[ParamId::kCanDiagPeriodMs]);
   pos_.started = accuracy_.started = diag_.started = false;
+#if UWBNAV_COOP
+  coop_.period_us = period_us_from_ms(params[ParamId::kCanCoopPeriodMs]);
+  coop_.started = false;
+  const auto n = static_cast<uint32_t>(params[ParamId::kCoopVehicleId]);  // 0..32766 (parameter bounds)
+  coop_id_ = n > 0 ? static_cast<uint16_t>(kFirstVehicleId + n) : kNoVehicleId;
+#endif
 }
 
 bool CanPublisher::due(Schedule& s, uint64_t t_us) {
@@ -109,15 +166,7 @@ bool CanPublisher::due(Schedule& s, uint64_t t_us) {
 
 void CanPublisher::send(Slot slot, hal::CanFrame& frame, bool saturated, hal::CanBus& bus) {
   counters_[slot] = next_alive_counter(counters_[slot]);
-  const Status s = bus.send(frame);
-  if (s == Status::kOk) {
-    ++stats_.sent;
-    if (saturated) ++stats_.saturated;
-  } else if (s == Status::kWouldBlock) {
-    ++stats_.dropped;
-  } else {
-    ++stats_.failed;
-  }
+  transmit(frame, saturated, bus, stats_);
 }
 
 void CanPublisher::on_cycle(uint64_t t_us, const NavOutput& nav, const CanDiag& diag, hal::CanBus& bus) {
@@ -144,6 +193,30 @@ void CanPublisher::on_cycle(uint64_t t_us, const NavOutput& nav, const CanDiag& 
     const bool sat = encode(diag_from(diag), counters_[kDiag], f);
     send(kDiag, f, sat, bus);
   }
+#if UWBNAV_COOP
+  send_coop(t_us, nav, bus);
+#endif
 }
+
+#if UWBNAV_COOP
+// The six frames of this vehicle's state, one alive counter for the group; a
+// frame the bus refuses is counted like any other and the group is not resent.
+void CanPublisher::send_coop(uint64_t t_us, const NavOutput& nav, hal::CanBus& bus) {
+  const bool pending = coop_pending_;
+  coop_pending_ = false;  // a state is good for the cycle it was set in
+  const bool usable = nav.status == NavStatus::kValid || nav.status == NavStatus::kDegraded;
+  if (coop_id_ == kNoVehicleId || !pending || !usable || !due(coop_, t_us)) return;
+  NeighbourState s = coop_state_;
+  s.vehicle_id = coop_id_;
+  const CoopParts parts = coop_parts_from(s, true);
+  hal::CanFrame f;
+  f.t_us = t_us;
+  for (size_t k = 0; k < kCoopFrames; ++k) {
+    const bool sat = encode_coop_part(parts, CoopGroup::kOwn, k, counters_[kCoop], f);
+    transmit(f, sat, bus, stats_);
+  }
+  counters_[kCoop] = next_alive_counter(counters_[kCoop]);
+}
+#endif
 
 }  // namespace uwbnav::can

@@ -4,19 +4,25 @@
 namespace uwbnav::can {
 namespace {
 
+// Receiver index = position in this list: HIL IMU parts, HIL UWB parts, then
+// (UWBNAV_COOP) the V2X_Neighbour parts in group order.
 constexpr uint32_t kInputIds[] = {id_of(MsgId::kHilImuTime), id_of(MsgId::kHilImuAccel),
                                   id_of(MsgId::kHilImuGyro), id_of(MsgId::kHilUwbRange),
-                                  id_of(MsgId::kHilUwbTime)};
+                                  id_of(MsgId::kHilUwbTime)
+#if UWBNAV_COOP
+                                  , coop_id(CoopGroup::kNeighbour, 0), coop_id(CoopGroup::kNeighbour, 1),
+                                  coop_id(CoopGroup::kNeighbour, 2), coop_id(CoopGroup::kNeighbour, 3),
+                                  coop_id(CoopGroup::kNeighbour, 4), coop_id(CoopGroup::kNeighbour, 5)
+#endif
+};
 constexpr uint8_t kImuAll = 0x7;
 constexpr uint8_t kUwbAll = 0x3;
+#if UWBNAV_COOP
+constexpr uint8_t kNeighbourAll = 0x3F;
+static_assert(kCoopFrames == 6, "kNeighbourAll has a bit per part");
+#endif
 
 }  // namespace
-
-uint64_t unwrap_time_us(uint32_t t32_us, uint64_t ref_us) {
-  const auto delta = static_cast<int32_t>(t32_us - static_cast<uint32_t>(ref_us));
-  if (delta < 0 && static_cast<uint64_t>(-static_cast<int64_t>(delta)) > ref_us) return t32_us;
-  return static_cast<uint64_t>(static_cast<int64_t>(ref_us) + delta);
-}
 
 bool CanSensorEncoder::encode_imu(const ImuSample& s, hal::CanFrame (&out)[kImuFrames]) {
   bool sat = encode(HilImuTimeMsg{static_cast<uint32_t>(s.t_us)}, imu_counter_, out[0]);
@@ -52,6 +58,9 @@ void CanSensorDecoder::reset() {
   for (auto& r : rx_) r.reset();
   imu_ = ImuGroup{};
   uwb_ = UwbGroup{};
+#if UWBNAV_COOP
+  neighbour_ = NeighbourGroup{};
+#endif
   stats_ = CanSensorStats{};
 }
 
@@ -88,11 +97,18 @@ Status CanSensorDecoder::check(size_t input, const MessageLayout& m, const hal::
 }
 
 Status CanSensorDecoder::on_frame(const hal::CanFrame& f, uint64_t now_us, CanSensorSample& out) {
+  static_assert(sizeof kInputIds / sizeof kInputIds[0] == kNumInputs, "one receiver per input id");
   for (size_t i = 0; i < kNumInputs; ++i) {
     if (f.id != kInputIds[i]) continue;
+#if UWBNAV_COOP
+    if (i < kNumHilInputs && !hil_enabled_) return Status::kNotFound;
+#endif
     const Status s = check(i, *find_layout(f.id), f);
     if (s != Status::kOk) return s;
     if (i < kImuFrames) return on_imu_part(i, f, now_us, out);
+#if UWBNAV_COOP
+    if (i >= kNumHilInputs) return on_neighbour_part(i - kNumHilInputs, f, now_us, out);
+#endif
     return on_uwb_part(i - kImuFrames, f, now_us, out);
   }
   return Status::kNotFound;
@@ -168,5 +184,45 @@ Status CanSensorDecoder::on_uwb_part(size_t part, const hal::CanFrame& f, uint64
   ++stats_.uwb_ranges;
   return Status::kOk;
 }
+
+#if UWBNAV_COOP
+// The six parts of one neighbour state, grouped by alive counter like the HIL
+// samples: a part with another counter drops the partial group (incomplete);
+// a complete group is dropped when a part was flagged (saturated) or the
+// sender marked it not valid, and delivered otherwise.
+Status CanSensorDecoder::on_neighbour_part(size_t part, const hal::CanFrame& f, uint64_t now_us,
+                                           CanSensorSample& out) {
+  FrameMeta meta;
+  CoopParts parts = neighbour_.parts;
+  if (decode_coop_part(f, CoopGroup::kNeighbour, part, parts, &meta) != Status::kOk) {
+    return Status::kRejected;  // unreachable after check(); defensive
+  }
+  if (neighbour_.have != 0 && neighbour_.counter != meta.counter) {
+    ++stats_.incomplete;
+    neighbour_ = NeighbourGroup{};
+    parts = CoopParts{};
+    static_cast<void>(decode_coop_part(f, CoopGroup::kNeighbour, part, parts, nullptr));  // this part, fresh group
+  }
+  neighbour_.parts = parts;
+  neighbour_.counter = meta.counter;
+  neighbour_.have = static_cast<uint8_t>(neighbour_.have | (1U << part));
+  neighbour_.saturated = neighbour_.saturated || meta.saturated;
+  if (neighbour_.have != kNeighbourAll) return Status::kEmpty;
+  const NeighbourGroup done = neighbour_;
+  neighbour_ = NeighbourGroup{};
+  if (done.saturated) {
+    ++stats_.saturated;
+    return Status::kRejected;
+  }
+  if (!done.parts.valid) {
+    ++stats_.neighbour_invalid;
+    return Status::kRejected;
+  }
+  out.kind = SensorKind::kNeighbour;
+  out.neighbour = neighbour_state_from(done.parts, now_us);
+  ++stats_.neighbour_states;
+  return Status::kOk;
+}
+#endif  // UWBNAV_COOP
 
 }  // namespace uwbnav::can

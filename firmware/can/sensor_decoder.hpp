@@ -1,6 +1,8 @@
 // HIL sensor input over CAN: the rig-side encoder (ImuSample/UwbRange -> frames)
 // and the firmware-side decoder (frames -> samples) with E2E checks, multi-frame
-// grouping by alive counter and 32-bit timestamp reconstruction.
+// grouping by alive counter and 32-bit timestamp reconstruction. With
+// UWBNAV_COOP the decoder also reassembles neighbour vehicles' states
+// (V2X_Neighbour*, relayed by the V2X gateway) with the same rules.
 #pragma once
 
 #include <cstddef>
@@ -14,10 +16,8 @@
 
 namespace uwbnav::can {
 
-// Reconstructs a 64-bit time from its low 32 bits: the value congruent to
-// t32_us (mod 2^32) nearest to ref_us (the receiver's clock). Exact while the
-// sensor time is within +-35.7 min of ref_us; never negative.
-uint64_t unwrap_time_us(uint32_t t32_us, uint64_t ref_us);
+// unwrap_time_us() (32-bit sensor time -> 64 bits against the receiver clock)
+// is declared in firmware/can/messages.hpp.
 
 constexpr size_t kImuFrames = 3;  // HIL_ImuTime, HIL_ImuAccel, HIL_ImuGyro
 constexpr size_t kUwbFrames = 2;  // HIL_UwbRange, HIL_UwbTime
@@ -38,23 +38,40 @@ class CanSensorEncoder {
 };
 
 struct CanSensorStats {
-  uint32_t frames = 0;          // HIL input frames seen (any verdict)
+  uint32_t frames = 0;          // input frames seen (HIL and V2X_Neighbour, any verdict)
   uint32_t crc_errors = 0;      // wrong CRC: dropped
   uint32_t counter_errors = 0;  // repeated / wrong sequence / counter 15: dropped
   uint32_t length_errors = 0;   // wrong DLC, extended or error frame: dropped
   uint32_t frames_lost = 0;     // frames missing per accepted counter steps > 1
   uint32_t incomplete = 0;      // partial groups discarded (a part never arrived)
-  uint32_t saturated = 0;       // complete samples dropped: the rig flagged clipping
+  uint32_t saturated = 0;       // complete samples dropped: the sender flagged clipping
   uint32_t imu_samples = 0;     // complete IMU samples delivered
   uint32_t uwb_ranges = 0;      // complete UWB ranges delivered
+#if UWBNAV_COOP
+  uint32_t neighbour_states = 0;   // complete V2X_Neighbour states delivered
+  uint32_t neighbour_invalid = 0;  // complete V2X_Neighbour states dropped: Valid = 0 (sender says do not use)
+#endif
 };
 
-enum class SensorKind : uint8_t { kNone = 0, kImu, kUwb };
+enum class SensorKind : uint8_t {
+  kNone = 0,
+  kImu,
+  kUwb,
+#if UWBNAV_COOP
+  kNeighbour,  // a neighbour vehicle's broadcast state (V2X_Neighbour*)
+#endif
+};
 
 struct CanSensorSample {
   SensorKind kind = SensorKind::kNone;
   ImuSample imu;   // valid when kind == kImu
   UwbRange uwb;    // valid when kind == kUwb
+#if UWBNAV_COOP
+  // Valid when kind == kNeighbour: t_us unwrapped from the 32-bit time of
+  // validity against the receiver clock, rx_t_us = that clock (now_us) at the
+  // group's last frame, covariance rebuilt from the sigmas and correlations.
+  NeighbourState neighbour;
+#endif
 };
 
 // Firmware side. Delivered samples still go through InputValidator like any
@@ -64,10 +81,19 @@ class CanSensorDecoder {
   // Reads can.e2e_max_delta.
   void configure(const Params& params);
 
+#if UWBNAV_COOP
+  // HIL_Imu*/HIL_Uwb* frames are decoded only while enabled (default: enabled);
+  // disabled they are kNotFound like any foreign frame, while V2X_Neighbour*
+  // frames are still decoded. The App mirrors can.hil_rx_enable here.
+  void set_hil_enabled(bool enabled) { hil_enabled_ = enabled; }
+  bool hil_enabled() const { return hil_enabled_; }
+#endif
+
   // Feeds one received frame; now_us is the receiver clock used to rebuild the
   // 64-bit sensor time. kOk: `out` holds a complete sample. kEmpty: frame
-  // accepted, sample not complete yet. kNotFound: not a HIL input frame
-  // (ignored, not counted). kRejected: E2E failure or flagged sample, dropped and counted.
+  // accepted, sample not complete yet. kNotFound: not an input frame (ignored,
+  // not counted). kRejected: E2E failure, flagged sample or (neighbour state)
+  // Valid = 0, dropped and counted.
   [[nodiscard]] Status on_frame(const hal::CanFrame& f, uint64_t now_us, CanSensorSample& out);
 
   const CanSensorStats& stats() const { return stats_; }
@@ -75,7 +101,12 @@ class CanSensorDecoder {
   void reset_stats() { stats_ = CanSensorStats{}; }  // counters only; reception state kept
 
  private:
-  static constexpr size_t kNumInputs = 5;
+  static constexpr size_t kNumHilInputs = kImuFrames + kUwbFrames;
+#if UWBNAV_COOP
+  static constexpr size_t kNumInputs = kNumHilInputs + kCoopFrames;
+#else
+  static constexpr size_t kNumInputs = kNumHilInputs;
+#endif
   Status check(size_t input, const MessageLayout& m, const hal::CanFrame& f);
   Status on_imu_part(size_t part, const hal::CanFrame& f, uint64_t now_us, CanSensorSample& out);
   Status on_uwb_part(size_t part, const hal::CanFrame& f, uint64_t now_us, CanSensorSample& out);
@@ -94,6 +125,18 @@ class CanSensorDecoder {
     uint32_t t32_us = 0;
     UwbRange range;
   };
+
+#if UWBNAV_COOP
+  Status on_neighbour_part(size_t part, const hal::CanFrame& f, uint64_t now_us, CanSensorSample& out);
+  struct NeighbourGroup {
+    uint8_t counter = 0;
+    uint8_t have = 0;  // bit per part (kCoopFrames)
+    bool saturated = false;
+    CoopParts parts;
+  };
+  NeighbourGroup neighbour_;
+  bool hil_enabled_ = true;
+#endif
 
   E2eReceiver rx_[kNumInputs];
   ImuGroup imu_;

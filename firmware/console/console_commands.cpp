@@ -204,6 +204,9 @@ void Console::cmd_stats(size_t argc, char**) {
 
 bool Console::step_stats(size_t step) {
   const AppStats& s = snap_.app;
+  // Lines 7-8 (GNSS) and 9-10 (neighbours) exist only in builds with those features.
+  if (!UWBNAV_GNSS && step >= 7) step += 2;
+  if (!UWBNAV_COOP && step >= 9) step += 2;
   switch (step) {
     case 0: {
       const LoopStats& l = s.loop;
@@ -270,6 +273,29 @@ bool Console::step_stats(size_t step) {
       add(" received=%lu fused=%lu", ul(dg.gnss_received), ul(dg.gnss_used));
       for (uint32_t v = 1; v < static_cast<uint32_t>(GnssVerdict::kCount); ++v) {
         add(" %s=%lu", gnss_verdict_name(static_cast<GnssVerdict>(v)), ul(dg.gnss_rejected[v]));
+      }
+      break;
+    }
+#endif
+#if UWBNAV_COOP
+    case 9: {
+      const SourceStats& src = s.neighbours;
+      begin("stats src=");
+      add("neighbours received=%lu accepted=%lu io_errors=%lu", ul(src.received), ul(src.accepted),
+          ul(src.io_errors));
+      for (uint32_t r = 0; r < kNumRejectReasons; ++r) {
+        add(" %s=%lu", reject_reason_name(static_cast<RejectReason>(r)), ul(src.rejected[r]));
+      }
+      break;
+    }
+    case 10: {
+      // What the estimator did with the ranges to neighbour vehicles, per NeighbourVerdict.
+      const NavDiagnostics& dg = snap_.nav;
+      begin("stats coop");
+      add(" states=%lu evictions=%lu ranges=%lu fused=%lu", ul(dg.neighbour_states), ul(dg.neighbour_evictions),
+          ul(dg.neighbour_ranges), ul(dg.neighbour_used));
+      for (uint32_t v = 1; v < static_cast<uint32_t>(NeighbourVerdict::kCount); ++v) {
+        add(" %s=%lu", neighbour_verdict_name(static_cast<NeighbourVerdict>(v)), ul(dg.neighbour_rejected[v]));
       }
       break;
     }

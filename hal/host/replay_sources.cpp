@@ -30,4 +30,13 @@ Status ReplayGnssSource::poll(uint64_t up_to_us, GnssFix& out) {
   return Status::kOk;
 }
 
+Status ReplayNeighbourSource::poll(uint64_t up_to_us, NeighbourState& out) {
+  if (finished()) return Status::kEmpty;
+  const NeighbourState& n = (*states_)[next_];
+  if (n.rx_t_us > up_to_us) return Status::kEmpty;
+  out = n;
+  ++next_;
+  return Status::kOk;
+}
+
 }  // namespace uwbnav::hal

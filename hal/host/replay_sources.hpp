@@ -1,4 +1,4 @@
-// Host IMU, UWB and GNSS sources replaying a format v1 recording in timestamp order.
+// Host IMU, UWB, GNSS and neighbour-state sources replaying a format v1 recording in timestamp order.
 // The UWB source hands out the range only: the NLOS label never reaches the firmware.
 #pragma once
 
@@ -76,14 +76,38 @@ class ReplayGnssSource : public GnssSource {
   size_t next_ = 0;
 };
 
-// Both replay sources of one recording (which must outlive them).
+// Replays neighbour vehicles' broadcast states when they arrive (rx_t_us).
+// The states must outlive the source.
+class ReplayNeighbourSource : public NeighbourSource {
+ public:
+  explicit ReplayNeighbourSource(const std::vector<NeighbourState>& states) : states_(&states) {}
+  explicit ReplayNeighbourSource(const dataset::Recording& rec) : states_(&rec.neighbours) {}
+
+  // kOk with the next state when its rx_t_us <= up_to_us, kEmpty otherwise.
+  [[nodiscard]] Status poll(uint64_t up_to_us, NeighbourState& out) override;
+  bool finished() const override { return next_ >= states_->size(); }
+  size_t delivered() const { return next_; }
+  // Arrival time of the next state [us]; only valid when !finished().
+  uint64_t next_rx_t_us() const { return (*states_)[next_].rx_t_us; }
+
+ private:
+  const std::vector<NeighbourState>* states_;
+  size_t next_ = 0;
+};
+
+// The replay sources of one recording (which must outlive them).
 struct ReplaySources {
-  explicit ReplaySources(const dataset::Recording& rec) : imu(rec), uwb(rec), gnss(rec) {}
+  explicit ReplaySources(const dataset::Recording& rec) : imu(rec), uwb(rec), gnss(rec), neighbours(rec) {}
   ReplayImuSource imu;
   ReplayUwbSource uwb;
   ReplayGnssSource gnss;
+  ReplayNeighbourSource neighbours;
   // The board's GNSS source: null when the recording has no gnss.csv.
   GnssSource* gnss_or_null(const dataset::Recording& rec) { return rec.gnss.empty() ? nullptr : &gnss; }
+  // The board's neighbour-state source: null when the recording has no neighbours.csv.
+  NeighbourSource* neighbours_or_null(const dataset::Recording& rec) {
+    return rec.neighbours.empty() ? nullptr : &neighbours;
+  }
 };
 
 }  // namespace uwbnav::hal

@@ -139,6 +139,12 @@ def main():
                  "1": "compiled in (`UWBNAV_MPS2_GNSS=1`; the replay has no fixes, so the cycle figures do not "
                       "include GNSS updates)"}.get(gnss, f"`UWBNAV_MPS2_GNSS={gnss}`")
     L.append(f"GNSS fusion (estimator/mm_gnss.*, navigator_gnss.cpp, docs/ekf.md \"GNSS\"): {gnss_text}.")
+    coop = cfg.get("UWBNAV_MPS2_COOP", "0")
+    coop_text = {"0": "compiled out (`UWBNAV_MPS2_COOP=0`, the board default: the MPS2 board has no V2X link; "
+                      "its cost with it in: docs/ekf.md \"Neighbour ranges\")",
+                 "1": "compiled in (`UWBNAV_MPS2_COOP=1`; the replay has no neighbours, so the cycle figures do "
+                      "not include neighbour ranges)"}.get(coop, f"`UWBNAV_MPS2_COOP={coop}`")
+    L.append(f"Neighbour ranges (estimator/navigator_coop.cpp, docs/ekf.md \"Neighbour ranges\"): {coop_text}.")
     L.append("")
     L.append("## Summary")
     L.append("")

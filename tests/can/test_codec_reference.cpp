@@ -59,6 +59,10 @@ int64_t ref_to_raw(const SignalDef& s, double phys, bool* flagged) {
       case NonFinite::kMaxFlagged:
         *flagged = true;
         return raw_max;
+#if UWBNAV_COOP
+      case NonFinite::kRawMinNa:
+        return -(int64_t{1} << (s.bit_len - 1));
+#endif
       case NonFinite::kZeroFlagged:
         break;
     }
@@ -79,6 +83,9 @@ int64_t ref_to_raw(const SignalDef& s, double phys, bool* flagged) {
 
 double ref_to_phys(const SignalDef& s, int64_t raw) {
   if (s.non_finite == NonFinite::kRawZeroNa && raw == 0) return std::nan("");
+#if UWBNAV_COOP
+  if (s.non_finite == NonFinite::kRawMinNa && raw == -(int64_t{1} << (s.bit_len - 1))) return std::nan("");
+#endif
   return static_cast<double>(raw) * s.factor + s.offset;
 }
 
@@ -167,11 +174,28 @@ std::vector<float> probe_values(const Signal& s, std::mt19937& rng) {
     with_neighbours(static_cast<float>(edge), 4);
   }
   // Exact ties: p * inv + raw_zero = k + 1/2 needs p = odd * 2^-(1 + v2(inv)).
+  // Every one of them for ordinary signals; for the wide ones (cooperative
+  // positions, +-2147 km) those within +-2^16 m, near the limits and 10^6 random
+  // ones (above 2^20 m a float holds no tie at all: its ulp exceeds the step).
   int twos = 1;
   for (unsigned inv = s.layout->inv_factor; inv % 2 == 0; inv /= 2) ++twos;
   const double step = std::ldexp(1.0, -twos);
-  for (double p = std::ceil(lo / step) * step; p <= hi; p += step) {
-    if (std::fmod(std::fabs(p) / step, 2.0) == 1.0) with_neighbours(static_cast<float>(p), 1);
+  auto ties_in = [&](double a, double b) {
+    for (double p = std::ceil(a / step) * step; p <= b; p += step) {
+      if (std::fmod(std::fabs(p) / step, 2.0) == 1.0) with_neighbours(static_cast<float>(p), 1);
+    }
+  };
+  if ((hi - lo) / step <= 4.0e7) {
+    ties_in(lo, hi);
+  } else {
+    ties_in(-65536.0, 65536.0);
+    ties_in(lo, lo + 4096.0 * step);
+    ties_in(hi - 4096.0 * step, hi);
+    std::uniform_real_distribution<double> anywhere(lo, hi);
+    for (int i = 0; i < 1000000; ++i) {
+      const double p = (2.0 * std::floor(anywhere(rng) / (2.0 * step)) + 1.0) * step;
+      with_neighbours(static_cast<float>(p), 1);
+    }
   }
   std::uniform_int_distribution<int64_t> raw(s.layout->raw_min, s.layout->raw_max);
   for (int i = 0; i < 20000; ++i) {
@@ -297,6 +321,7 @@ TEST(CanCodecReference, EveryRawValueDecodesToTheSameFloatAsTheDoubleFormula) {
   for (const Signal& s : scaled_signals()) {
     const int64_t lo = s.def->is_signed ? -(int64_t{1} << (s.def->bit_len - 1)) : 0;
     const int64_t hi = s.def->is_signed ? (int64_t{1} << (s.def->bit_len - 1)) - 1 : (int64_t{1} << s.def->bit_len) - 1;
+    if (hi - lo > (int64_t{1} << 26)) continue;  // wide signals: next test
     size_t mismatches = 0;
     for (int64_t raw = lo; raw <= hi; ++raw) {
       const float got = phys_from_raw(*s.layout, raw);
@@ -308,6 +333,64 @@ TEST(CanCodecReference, EveryRawValueDecodesToTheSameFloatAsTheDoubleFormula) {
     EXPECT_EQ(mismatches, 0U) << s.name();
   }
 }
+
+#if UWBNAV_COOP
+// Wide signals (32-bit cooperative positions, |raw| up to 2^31, not all exact in
+// float) decode by an exact integer division: the float nearest to raw / inv,
+// ties to even. The reference is the double quotient rounded to float, which is
+// that float (the double quotient is exact at a tie; elsewhere within 2^-53
+// relative, while k / 1000 is at least 2^-33 relative from a tie). The double
+// product raw * factor of the old formula could only differ at exact ties (|value|
+// in [2^21, 2^22) m, raw an odd multiple of 125: all of them are checked), and
+// then the new result must be the even neighbour.
+TEST(CanCodecReference, WideSignalsDecodeToTheNearestFloatTiesToEven) {
+  std::mt19937 rng(31);
+  size_t wide = 0;
+  for (const Signal& s : scaled_signals()) {
+    if (s.def->bit_len <= 26) continue;
+    ++wide;
+    const int64_t lo = -(int64_t{1} << (s.def->bit_len - 1));
+    const int64_t hi = (int64_t{1} << (s.def->bit_len - 1)) - 1;
+    const double inv = s.layout->inv_factor;
+    size_t mismatches = 0;
+    size_t ties = 0;
+    auto check = [&](int64_t raw) {
+      const float got = phys_from_raw(*s.layout, raw);
+      const auto want = static_cast<float>(static_cast<double>(raw - s.layout->raw_zero) / inv);
+      if (test::float_bits(got) != test::float_bits(want) && ++mismatches <= 5) {
+        ADD_FAILURE() << s.name() << " raw " << raw << ": " << got << " vs nearest float " << want;
+      }
+      const auto old = static_cast<float>(ref_to_phys(*s.def, raw));
+      if (test::float_bits(old) != test::float_bits(got)) {
+        // Only an exact tie between two floats may differ: got is then even.
+        const double exact = static_cast<double>(raw) / inv;
+        const double gap = std::fabs(static_cast<double>(old) - static_cast<double>(got));
+        EXPECT_EQ(std::fabs(exact - static_cast<double>(got)), gap / 2.0) << s.name() << " raw " << raw;
+        EXPECT_EQ(test::float_bits(got) & 1U, 0U) << s.name() << " raw " << raw;
+        ++ties;
+      }
+    };
+    for (int64_t raw = -(int64_t{1} << 20); raw <= (int64_t{1} << 20); ++raw) check(raw);
+    // Around 2^24, where decoding switches from the float division to the integer one.
+    for (int64_t raw = (int64_t{1} << 24) - (int64_t{1} << 20); raw <= (int64_t{1} << 24) + (int64_t{1} << 22); ++raw) {
+      check(raw);
+      check(-raw);
+    }
+    for (int64_t raw = lo; raw < lo + 100000; ++raw) check(raw);
+    for (int64_t raw = hi - 100000; raw <= hi; ++raw) check(raw);
+    std::uniform_int_distribution<int64_t> any(lo, hi);
+    for (int i = 0; i < 5000000; ++i) check(any(rng));
+    // Every exact tie above 2^21 m: raw = 125 * odd with |raw| / 1000 in [2^21, 2^22).
+    for (int64_t k = 2097152000 / 125 + 1; k * 125 <= hi; k += 2) {
+      check(k * 125);
+      check(-k * 125);
+    }
+    EXPECT_EQ(mismatches, 0U) << s.name();
+    EXPECT_LE(ties, 300000U) << s.name();  // old formula off only at ties (none expected: its product lands on them)
+  }
+  EXPECT_EQ(wide, 4U) << "Coop_PosX/Y, Neighbour_PosX/Y";
+}
+#endif
 
 // Typed encode() against the old packer fed the old double values, frame by
 // frame; time and counter signals at and beyond their field limits.
@@ -391,6 +474,35 @@ TEST(CanCodecReference, TypedFramesAreBitIdenticalToTheDoublePacker) {
     const HilUwbTimeMsg ut{any(rng), value(140) - 64.0F, value(140) - 64.0F};
     const double ut_v[] = {0, 0, 0, static_cast<double>(ut.t_sensor_us), f64(ut.fp_power_dbm), f64(ut.rx_power_dbm)};
     same(find_message(id_of(MsgId::kHilUwbTime)), ut_v, encode(ut, counter, f), f, counter);
+
+#if UWBNAV_COOP
+    for (const CoopGroup g : {CoopGroup::kOwn, CoopGroup::kNeighbour}) {
+      CoopParts cp;
+      cp.valid = any(rng) % 2 == 0;
+      cp.cooperative = any(rng) % 3 == 0;
+      cp.vehicle_id = static_cast<uint16_t>(any(rng));
+      cp.t_sensor_us = any(rng);
+      cp.pos_nav_m = Vec3f{value(2.0e6), value(2.0e6), value(15000)};
+      cp.vel_nav_mps = Vec3f{value(300), value(300), value(300)};
+      cp.sigma_m = Vec3f{value(60), value(60), value(60)};
+      cp.corr_xy = value(1.0);
+      cp.corr_xz = value(1.0);
+      cp.corr_yz = value(1.0);
+      const double parts[kCoopFrames][7] = {
+          {0, 0, 0, cp.valid ? 1.0 : 0.0, cp.cooperative ? 1.0 : 0.0, static_cast<double>(cp.vehicle_id),
+           static_cast<double>(cp.t_sensor_us)},
+          {0, 0, 0, f64(cp.pos_nav_m.x), f64(cp.vel_nav_mps.x)},
+          {0, 0, 0, f64(cp.pos_nav_m.y), f64(cp.vel_nav_mps.y)},
+          {0, 0, 0, f64(cp.pos_nav_m.z), f64(cp.vel_nav_mps.z)},
+          {0, 0, 0, f64(cp.sigma_m.x), f64(cp.sigma_m.y), f64(cp.sigma_m.z)},
+          {0, 0, 0, f64(cp.corr_xy), f64(cp.corr_xz), f64(cp.corr_yz)}};
+      for (size_t k = 0; k < kCoopFrames; ++k) {
+        const MessageDef* m = find_message(coop_id(g, k));
+        ASSERT_NE(m, nullptr);
+        same(m, parts[k], encode_coop_part(cp, g, k, counter, f), f, counter);
+      }
+    }
+#endif
   }
   hal::CanFrame f;
   NavTimeMsg t;

@@ -1,6 +1,7 @@
 // Produces a candump log and the matching estimates.csv from CanPublisher
-// output (a circle drive with invalid and saturated epochs), for the python
-// check tests/scripts/can_decode.py, and decodes the log back in C++.
+// output (a circle drive with invalid and saturated epochs; with UWBNAV_COOP
+// also this vehicle's UWBNAV_Coop* state, tag at the body origin), for the
+// python check tests/scripts/can_decode.py, and decodes the log back in C++.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -54,6 +55,13 @@ TEST(CanFixture, WritesCandumpLogAndEstimatesForThePythonDecoder) {
   dataset::EstimatesWriter est;
   ASSERT_EQ(est.open(dir + "/estimates.csv"), Status::kOk);
   Params params;
+#if UWBNAV_COOP
+  ASSERT_EQ(params.set(ParamId::kCoopVehicleId, 1.0F), Status::kOk);
+  // Groups at cycles 20..140 (status initialising before), 151 (150 is invalid), 160..490.
+  const uint32_t coop_frames = (13 + 1 + 34) * static_cast<uint32_t>(kCoopFrames);
+#else
+  const uint32_t coop_frames = 0;
+#endif
   CanPublisher pub;
   pub.configure(params);
   CanDiag diag;
@@ -63,11 +71,14 @@ TEST(CanFixture, WritesCandumpLogAndEstimatesForThePythonDecoder) {
     ASSERT_EQ(est.write(o), Status::kOk);
     diag.set_anchor_nlos(i % 4, i % 8 < 4);
     diag.resets = o.resets;
+#if UWBNAV_COOP
+    pub.set_coop_state(coop_state_from(o, Vec3f{}, pub.coop_vehicle_id(), false));
+#endif
     pub.on_cycle(3000000 + static_cast<uint64_t>(i) * 10000 + 10000, o, diag, tee);
   }
   ASSERT_EQ(est.close(), Status::kOk);
   ASSERT_EQ(log.close(), Status::kOk);
-  EXPECT_EQ(pub.stats().sent, static_cast<uint32_t>(n * 4 + 2 * (n / 2) + n / 10));
+  EXPECT_EQ(pub.stats().sent, static_cast<uint32_t>(n * 4 + 2 * (n / 2) + n / 10) + coop_frames);
   EXPECT_EQ(pub.stats().saturated, 2U);
 
   // Read back with the C++ reader: every position frame decodes to its output.
@@ -75,7 +86,11 @@ TEST(CanFixture, WritesCandumpLogAndEstimatesForThePythonDecoder) {
   ASSERT_EQ(reader.open(dir + "/can.log"), Status::kOk);
   hal::CanFrame f;
   int positions = 0;
+  uint32_t coop_read = 0;
   while (reader.next(f) == Status::kOk) {
+#if UWBNAV_COOP
+    if (f.id >= coop_id(CoopGroup::kOwn, 0) && f.id < coop_id(CoopGroup::kOwn, kCoopFrames)) ++coop_read;
+#endif
     if (f.id != id_of(MsgId::kPosXY)) continue;
     PosXYMsg m;
     FrameMeta meta;
@@ -90,6 +105,7 @@ TEST(CanFixture, WritesCandumpLogAndEstimatesForThePythonDecoder) {
     ++positions;
   }
   EXPECT_EQ(positions, n);
+  EXPECT_EQ(coop_read, coop_frames);
   EXPECT_EQ(reader.skipped(), 0U);
 }
 

@@ -217,5 +217,236 @@ TEST(CanMessages, HilImuFramesRoundTrip) {
   EXPECT_NEAR(rd.range_m, -0.5F, 1e-6F);
 }
 
+#if UWBNAV_COOP
+// ---- Cooperative positioning: UWBNAV_Coop* / V2X_Neighbour* ----------------
+
+// A state with the covariance built from sigmas and correlations.
+NeighbourState coop_state(Vec3f pos, Vec3f vel, Vec3f sigma, float rxy, float rxz, float ryz) {
+  NeighbourState s;
+  s.t_us = 7000123456ULL;  // above 2^32: the frames carry the low 32 bits
+  s.rx_t_us = s.t_us;
+  s.vehicle_id = 0x8005;
+  s.pos_nav_m = pos;
+  s.vel_nav_mps = vel;
+  s.cov_pos_m2[0] = sigma.x * sigma.x;
+  s.cov_pos_m2[1] = rxy * sigma.x * sigma.y;
+  s.cov_pos_m2[2] = rxz * sigma.x * sigma.z;
+  s.cov_pos_m2[3] = sigma.y * sigma.y;
+  s.cov_pos_m2[4] = ryz * sigma.y * sigma.z;
+  s.cov_pos_m2[5] = sigma.z * sigma.z;
+  s.cooperative = true;
+  return s;
+}
+
+float ulp(float v) { return std::nextafter(std::fabs(v), std::numeric_limits<float>::infinity()) - std::fabs(v); }
+
+TEST(CanCoop, KnownFrameBytesOfTheTimeAndPosXParts) {
+  CoopParts p;
+  p.valid = true;
+  p.cooperative = true;
+  p.vehicle_id = 0x8005;
+  p.t_sensor_us = 0x12345678U;
+  p.pos_nav_m = Vec3f{-1.5F, 0.0F, 0.0F};  // raw -1500 = 0xFFFFFA24
+  p.vel_nav_mps = Vec3f{kNan, 0.0F, 0.0F}; // not reported: raw 0x8000
+  hal::CanFrame f;
+  EXPECT_FALSE(encode_coop_part(p, CoopGroup::kOwn, 0, 4, f));
+  EXPECT_EQ(f.id, 0x110U);
+  EXPECT_EQ(f.len, 8);
+  EXPECT_EQ(f.data[1], 0x34);  // Valid (bit 12), Cooperative (bit 13), counter 4
+  EXPECT_EQ(f.data[2], 0x05);
+  EXPECT_EQ(f.data[3], 0x80);
+  EXPECT_EQ(f.data[4], 0x78);
+  EXPECT_EQ(f.data[5], 0x56);
+  EXPECT_EQ(f.data[6], 0x34);
+  EXPECT_EQ(f.data[7], 0x12);
+  EXPECT_EQ(f.data[0], e2e_crc(0x1110, f.data, 8));
+  EXPECT_FALSE(encode_coop_part(p, CoopGroup::kNeighbour, 1, 4, f)) << "not reported is a code, not a saturation";
+  EXPECT_EQ(f.id, 0x0C1U);
+  EXPECT_EQ(f.data[1], 0x04);
+  EXPECT_EQ(f.data[2], 0x24);
+  EXPECT_EQ(f.data[3], 0xFA);
+  EXPECT_EQ(f.data[4], 0xFF);
+  EXPECT_EQ(f.data[5], 0xFF);
+  EXPECT_EQ(f.data[6], 0x00);
+  EXPECT_EQ(f.data[7], 0x80);
+  EXPECT_EQ(f.data[0], e2e_crc(0x10C1, f.data, 8));
+  CoopParts d;
+  ASSERT_EQ(decode_coop_part(f, CoopGroup::kNeighbour, 1, d), Status::kOk);
+  EXPECT_EQ(d.pos_nav_m.x, -1.5F);
+  EXPECT_TRUE(std::isnan(d.vel_nav_mps.x));
+  EXPECT_EQ(decode_coop_part(f, CoopGroup::kOwn, 1, d), Status::kInvalidArgument) << "the other group's id";
+  EXPECT_EQ(decode_coop_part(f, CoopGroup::kNeighbour, 2, d), Status::kInvalidArgument) << "another part's id";
+}
+
+TEST(CanCoop, StatesRoundTripWithinTheQuantisationOfBothGroups) {
+  std::mt19937 rng(16);
+  std::uniform_real_distribution<float> horiz(-2.0e6F, 2.0e6F), local(-8000.0F, 8000.0F), vert(-10000.0F, 10000.0F),
+      vel(-320.0F, 320.0F), sig(0.002F, 60.0F), rho(-0.95F, 0.95F);
+  for (int i = 0; i < 5000; ++i) {
+    const bool far = i % 2 == 0;
+    const Vec3f pos{far ? horiz(rng) : local(rng), far ? horiz(rng) : local(rng), vert(rng)};
+    const float a = rho(rng), b = rho(rng);
+    // xz, yz such that the correlation matrix stays positive definite
+    NeighbourState s = coop_state(pos, Vec3f{vel(rng), vel(rng), vel(rng)}, Vec3f{sig(rng), sig(rng), sig(rng)}, a,
+                                  0.5F * b, 0.3F * a);
+    s.cooperative = i % 3 == 0;
+    s.vehicle_id = static_cast<uint16_t>(0x8000 + 1 + i % 32766);
+    const CoopGroup g = i % 2 == 0 ? CoopGroup::kOwn : CoopGroup::kNeighbour;
+    hal::CanFrame f[kCoopFrames];
+    ASSERT_FALSE(encode_coop(s, g, static_cast<uint8_t>(i % 15), f));
+    for (size_t k = 0; k < kCoopFrames; ++k) EXPECT_EQ(f[k].id, coop_id(g, k));
+    NeighbourState d;
+    CoopMeta meta;
+    const uint64_t now = s.t_us + 20000;  // received 20 ms later
+    ASSERT_EQ(decode_coop(f, g, now, d, &meta), Status::kOk);
+    EXPECT_EQ(meta.counter, i % 15);
+    EXPECT_FALSE(meta.saturated);
+    EXPECT_TRUE(meta.valid);
+    EXPECT_EQ(d.t_us, s.t_us) << "unwrapped from the 32-bit time";
+    EXPECT_EQ(d.rx_t_us, now);
+    EXPECT_EQ(d.vehicle_id, s.vehicle_id);
+    EXPECT_EQ(d.cooperative, s.cooperative);
+    // Half a millimetre of quantisation plus half an ulp of the float result.
+    EXPECT_NEAR(d.pos_nav_m.x, s.pos_nav_m.x, 0.0005F + ulp(s.pos_nav_m.x) / 2.0F);
+    EXPECT_NEAR(d.pos_nav_m.y, s.pos_nav_m.y, 0.0005F + ulp(s.pos_nav_m.y) / 2.0F);
+    EXPECT_NEAR(d.pos_nav_m.z, s.pos_nav_m.z, 0.0005F + ulp(s.pos_nav_m.z) / 2.0F);
+    if (std::fabs(s.pos_nav_m.x) >= 16384.0F) {
+      EXPECT_EQ(d.pos_nav_m.x, s.pos_nav_m.x) << "beyond 16 km a float step exceeds 2 mm: the same float comes back";
+    }
+    EXPECT_NEAR(d.vel_nav_mps.x, s.vel_nav_mps.x, 0.005F + 1e-4F);
+    EXPECT_NEAR(d.vel_nav_mps.z, s.vel_nav_mps.z, 0.005F + 1e-4F);
+    const float sx = std::sqrt(s.cov_pos_m2[0]), sy = std::sqrt(s.cov_pos_m2[3]), sz = std::sqrt(s.cov_pos_m2[5]);
+    const float dsx = std::sqrt(d.cov_pos_m2[0]), dsy = std::sqrt(d.cov_pos_m2[3]), dsz = std::sqrt(d.cov_pos_m2[5]);
+    EXPECT_NEAR(dsx, sx, 0.0005F + 1e-5F);
+    EXPECT_NEAR(dsy, sy, 0.0005F + 1e-5F);
+    EXPECT_NEAR(dsz, sz, 0.0005F + 1e-5F);
+    EXPECT_NEAR(d.cov_pos_m2[1] / (dsx * dsy), s.cov_pos_m2[1] / (sx * sy), 0.5F / 127.0F + 1e-5F);
+    EXPECT_NEAR(d.cov_pos_m2[2] / (dsx * dsz), s.cov_pos_m2[2] / (sx * sz), 0.5F / 127.0F + 1e-5F);
+    EXPECT_NEAR(d.cov_pos_m2[4] / (dsy * dsz), s.cov_pos_m2[4] / (sy * sz), 0.5F / 127.0F + 1e-5F);
+  }
+}
+
+TEST(CanCoop, OutOfRangeValuesSaturateWithTheFlagAndUnknownVelocityIsACode) {
+  hal::CanFrame f[kCoopFrames];
+  NeighbourState d;
+  CoopMeta meta;
+  // In range at the limits: nothing flagged.
+  NeighbourState s = coop_state(Vec3f{2147483.0F, -2147483.0F, -16777.0F}, Vec3f{327.67F, -327.67F, kNan},
+                                Vec3f{65.535F, 0.001F, 1.0F}, 0.0F, 0.0F, 0.0F);
+  EXPECT_FALSE(encode_coop(s, CoopGroup::kOwn, 0, f));
+  ASSERT_EQ(decode_coop(f, CoopGroup::kOwn, s.t_us, d, &meta), Status::kOk);
+  EXPECT_FALSE(meta.saturated);
+  EXPECT_EQ(d.pos_nav_m.x, 2147483.0F);
+  EXPECT_EQ(d.pos_nav_m.y, -2147483.0F);
+  EXPECT_NEAR(d.vel_nav_mps.y, -327.67F, 1e-4F) << "the minimum is a value, not the not-reported code";
+  EXPECT_TRUE(std::isnan(d.vel_nav_mps.z));
+  EXPECT_NEAR(d.cov_pos_m2[0], 65.535F * 65.535F, 1e-2F);
+
+  // Beyond the fields: clipped to the nearest limit (never wrapped), flagged.
+  const struct {
+    Vec3f pos, vel, sigma;
+  } cases[] = {
+      {Vec3f{3.0e6F, 0, 0}, Vec3f{0, 0, 0}, Vec3f{1, 1, 1}},
+      {Vec3f{0, -2.2e6F, 0}, Vec3f{0, 0, 0}, Vec3f{1, 1, 1}},
+      {Vec3f{0, 0, 17000.0F}, Vec3f{0, 0, 0}, Vec3f{1, 1, 1}},
+      {Vec3f{0, 0, 0}, Vec3f{400.0F, 0, 0}, Vec3f{1, 1, 1}},
+      {Vec3f{0, 0, 0}, Vec3f{0, -400.0F, 0}, Vec3f{1, 1, 1}},
+      {Vec3f{0, 0, 0}, Vec3f{0, 0, 0}, Vec3f{1, 70.0F, 1}},
+      {Vec3f{kNan, 0, 0}, Vec3f{0, 0, 0}, Vec3f{1, 1, 1}},
+  };
+  for (const auto& c : cases) {
+    s = coop_state(c.pos, c.vel, c.sigma, 0.0F, 0.0F, 0.0F);
+    EXPECT_TRUE(encode_coop(s, CoopGroup::kOwn, 1, f));
+    ASSERT_EQ(decode_coop(f, CoopGroup::kOwn, s.t_us, d, &meta), Status::kOk);
+    EXPECT_TRUE(meta.saturated);
+  }
+  s = coop_state(Vec3f{3.0e6F, -2.2e6F, 17000.0F}, Vec3f{400.0F, -400.0F, 0}, Vec3f{1, 70.0F, 1}, 0, 0, 0);
+  EXPECT_TRUE(encode_coop(s, CoopGroup::kOwn, 1, f));
+  ASSERT_EQ(decode_coop(f, CoopGroup::kOwn, s.t_us, d, &meta), Status::kOk);
+  EXPECT_NEAR(d.pos_nav_m.x, 2147483.647F, 0.125F);
+  EXPECT_NEAR(d.pos_nav_m.y, -2147483.648F, 0.125F);
+  EXPECT_NEAR(d.pos_nav_m.z, 16777.215F, 0.001F);
+  EXPECT_NEAR(d.vel_nav_mps.x, 327.67F, 1e-4F);
+  EXPECT_NEAR(d.vel_nav_mps.y, -327.67F, 1e-4F);
+  EXPECT_NEAR(std::sqrt(d.cov_pos_m2[3]), 65.535F, 1e-4F);
+
+  // A variance that is negative or NaN has no sigma: sent as the maximum, flagged.
+  s = coop_state(Vec3f{1, 2, 3}, Vec3f{0, 0, 0}, Vec3f{1, 1, 1}, 0, 0, 0);
+  s.cov_pos_m2[5] = -0.01F;
+  EXPECT_TRUE(encode_coop(s, CoopGroup::kOwn, 2, f));
+  // A non-finite off-diagonal is flagged too.
+  s = coop_state(Vec3f{1, 2, 3}, Vec3f{0, 0, 0}, Vec3f{1, 1, 1}, 0, 0, 0);
+  s.cov_pos_m2[1] = kNan;
+  EXPECT_TRUE(encode_coop(s, CoopGroup::kOwn, 2, f));
+}
+
+TEST(CanCoop, CorrelationsAreClampedToPlusMinusOneAndRoundedToSteps) {
+  const CoopParts exact = coop_parts_from(coop_state(Vec3f{}, Vec3f{}, Vec3f{0.1F, 0.2F, 0.3F}, 1.0F, -1.0F, 0.5F), true);
+  EXPECT_EQ(exact.corr_xy, 1.0F);
+  EXPECT_EQ(exact.corr_xz, -1.0F);
+  NeighbourState s = coop_state(Vec3f{}, Vec3f{}, Vec3f{0.1F, 0.2F, 0.3F}, 0.0F, 0.0F, 0.0F);
+  s.cov_pos_m2[1] = 1.0001F * 0.1F * 0.2F;   // |rho| a rounding error above 1
+  s.cov_pos_m2[2] = -5.0F;                   // grossly inconsistent: still the nearest valid correlation
+  s.cov_pos_m2[4] = 0.5F / 127.0F * 0.2F * 0.3F;  // exactly half a step: rounds away from zero
+  hal::CanFrame f[kCoopFrames];
+  EXPECT_FALSE(encode_coop(s, CoopGroup::kNeighbour, 0, f)) << "clamping is not a saturation";
+  CoopParts p;
+  for (size_t k = 0; k < kCoopFrames; ++k) ASSERT_EQ(decode_coop_part(f[k], CoopGroup::kNeighbour, k, p), Status::kOk);
+  EXPECT_EQ(read_raw(signal_layout(*find_layout(0x0C5), kFirstPayloadSignal), f[5].data), 127);
+  EXPECT_EQ(read_raw(signal_layout(*find_layout(0x0C5), kFirstPayloadSignal + 1), f[5].data), -127);
+  const int64_t yz = read_raw(signal_layout(*find_layout(0x0C5), kFirstPayloadSignal + 2), f[5].data);
+  EXPECT_TRUE(yz == 0 || yz == 1) << yz;  // the float product lands within a rounding error of the tie
+  EXPECT_EQ(p.corr_xy, 1.0F);
+  EXPECT_EQ(p.corr_xz, -1.0F);
+  // A zero sigma has no correlation: 0, not NaN.
+  s = coop_state(Vec3f{}, Vec3f{}, Vec3f{0.0F, 0.2F, 0.3F}, 0.0F, 0.0F, 0.0F);
+  const CoopParts z = coop_parts_from(s, true);
+  EXPECT_EQ(z.corr_xy, 0.0F);
+  EXPECT_EQ(z.corr_xz, 0.0F);
+  EXPECT_FALSE(encode_coop(s, CoopGroup::kNeighbour, 0, f));
+}
+
+TEST(CanCoop, CovarianceIsRebuiltFromSigmasAndCorrelations) {
+  CoopParts p;
+  p.valid = true;
+  p.vehicle_id = 0x8001;
+  p.t_sensor_us = 1000;
+  p.sigma_m = Vec3f{0.05F, 0.08F, 0.2F};
+  p.corr_xy = 0.5F;
+  p.corr_xz = -0.25F;
+  p.corr_yz = 0.125F;
+  const NeighbourState s = neighbour_state_from(p, 5000);
+  EXPECT_EQ(s.t_us, 1000U);
+  EXPECT_EQ(s.rx_t_us, 5000U);
+  EXPECT_FLOAT_EQ(s.cov_pos_m2[0], 0.0025F);
+  EXPECT_FLOAT_EQ(s.cov_pos_m2[1], 0.5F * 0.05F * 0.08F);
+  EXPECT_FLOAT_EQ(s.cov_pos_m2[2], -0.25F * 0.05F * 0.2F);
+  EXPECT_FLOAT_EQ(s.cov_pos_m2[3], 0.0064F);
+  EXPECT_FLOAT_EQ(s.cov_pos_m2[4], 0.125F * 0.08F * 0.2F);
+  EXPECT_FLOAT_EQ(s.cov_pos_m2[5], 0.04F);
+  EXPECT_TRUE(std::isnan(s.vel_nav_mps.x)) << "velocity not reported stays NaN";
+}
+
+TEST(CanCoop, GroupDecodeNeedsOneCounterTheRightIdsAndGoodCrcs) {
+  const NeighbourState s = coop_state(Vec3f{10, 20, 1}, Vec3f{1, 0, 0}, Vec3f{0.1F, 0.1F, 0.3F}, 0, 0, 0);
+  hal::CanFrame a[kCoopFrames];
+  hal::CanFrame b[kCoopFrames];
+  ASSERT_FALSE(encode_coop(s, CoopGroup::kNeighbour, 3, a));
+  ASSERT_FALSE(encode_coop(s, CoopGroup::kNeighbour, 4, b));
+  NeighbourState d;
+  hal::CanFrame mixed[kCoopFrames];
+  for (size_t k = 0; k < kCoopFrames; ++k) mixed[k] = k == 3 ? b[k] : a[k];
+  EXPECT_EQ(decode_coop(mixed, CoopGroup::kNeighbour, s.t_us, d), Status::kRejected) << "two groups mixed";
+  EXPECT_EQ(decode_coop(a, CoopGroup::kOwn, s.t_us, d), Status::kInvalidArgument) << "neighbour ids are not ours";
+  a[4].data[6] ^= 0x20;
+  EXPECT_EQ(decode_coop(a, CoopGroup::kNeighbour, s.t_us, d), Status::kRejected) << "bad CRC";
+  NeighbourState not_valid_src = s;
+  ASSERT_FALSE(encode_coop(not_valid_src, CoopGroup::kNeighbour, 5, b, false));
+  CoopMeta meta;
+  ASSERT_EQ(decode_coop(b, CoopGroup::kNeighbour, s.t_us, d, &meta), Status::kOk);
+  EXPECT_FALSE(meta.valid);
+}
+#endif  // UWBNAV_COOP
+
 }  // namespace
 }  // namespace uwbnav::can

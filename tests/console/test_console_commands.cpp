@@ -109,7 +109,7 @@ TEST(ConsoleCommands, StatsShowsLoopSourcesRejectsCanNavAndConsoleCounters) {
   rig.run_s(5.0);
   const uint32_t tx_before = rig.can.counters().tx_ok;  // the firmware keeps sending while the reply goes out
   const auto lines = reply_lines(rig.command("stats"));
-  ASSERT_EQ(lines.size(), 10U);
+  ASSERT_EQ(lines.size(), 12U);
   const AppStats& s = rig.app.stats();
   EXPECT_EQ(lines[0].rfind("stats loop ", 0), 0U);
   EXPECT_EQ(kv(lines[0], "overruns"), "1");
@@ -144,14 +144,20 @@ TEST(ConsoleCommands, StatsShowsLoopSourcesRejectsCanNavAndConsoleCounters) {
   EXPECT_EQ(lines[8].rfind("stats gnss ", 0), 0U);
   EXPECT_EQ(kv(lines[8], "fused"), "0");
   EXPECT_EQ(kv(lines[8], "gate"), "0");
-  EXPECT_EQ(lines[9].rfind("stats console ", 0), 0U);
+  // Neighbour vehicles: their states through validation (none here), then the ranges to them.
+  EXPECT_EQ(kv(lines[9], "src"), "neighbours");
+  EXPECT_EQ(kv(lines[9], "received"), "0");
+  EXPECT_EQ(lines[10].rfind("stats coop ", 0), 0U);
+  EXPECT_EQ(kv(lines[10], "ranges"), "0");
+  EXPECT_EQ(kv(lines[10], "stale"), "0");
+  EXPECT_EQ(lines[11].rfind("stats console ", 0), 0U);
 }
 
 TEST(ConsoleCommands, StatsShowsCanBusOffFromTheBoard) {
   ConsoleRig rig(sim_recording());
   rig.can.set_state(hal::CanBusState::kBusOff);
   const auto lines = reply_lines(rig.command("stats"));
-  ASSERT_EQ(lines.size(), 10U);
+  ASSERT_EQ(lines.size(), 12U);
   EXPECT_EQ(kv(lines[5], "state"), "bus_off");
   EXPECT_EQ(kv(lines[5], "bus_off"), "1");
 }

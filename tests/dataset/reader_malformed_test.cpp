@@ -1,5 +1,5 @@
 // Format v1 reader on malformed input: every bad-row kind skipped, counted and
-// warned with its line (gnss.csv included), and no input (garbage, CRLF, empty,
+// warned with its line (gnss.csv and neighbours.csv included), and no input (garbage, CRLF, empty,
 // huge) crashes it.
 #include <gtest/gtest.h>
 
@@ -162,7 +162,8 @@ TEST(DatasetReader, GarbageBytesNeverCrashAndWarningsAreCapped) {
 
   // Garbage in every file, header included: an error or a load, never a crash.
   for (uint32_t seed = 1; seed <= 40; ++seed) {
-    for (const char* f : {"anchors.csv", "uwb.csv", "imu.csv", "truth.csv", "tags.csv", "meta.ini", "gnss.csv"}) {
+    for (const char* f : {"anchors.csv", "uwb.csv", "imu.csv", "truth.csv", "tags.csv", "meta.ini", "gnss.csv",
+                          "neighbours.csv"}) {
       std::string bytes = seed % 2 == 0 ? std::string(kAnchorsOk).substr(0, 22) : std::string();
       x = seed * 7919U + static_cast<uint32_t>(bytes.size());
       for (size_t i = 0; i < 3000; ++i) {
@@ -578,6 +579,183 @@ TEST(DatasetReaderGnss, MetaGnssLeverTakesCommasOrBlanksAndRejectsAnythingElse) 
     EXPECT_EQ(rec.site.gnss_lever_body_m.z, 0.0F) << bad;
     EXPECT_EQ(rec.meta.count("gnss_lever_m"), 0U) << bad;
   }
+}
+
+// neighbours.csv (extension of format v1): every malformed row kind is
+// skipped, counted and warned with its line; time order is per vehicle.
+TEST(DatasetReaderNeighbours, BadNeighbourRowsAreSkippedWithTheirLine) {
+  const std::string dir = scratch_dir();
+  write_file(dir + "/anchors.csv", kAnchorsOk);
+  write_file(dir + "/uwb.csv", "t_s,anchor_id,range_m\n");
+  write_file(dir + "/neighbours.csv",
+             "t_s,vehicle_id,x_m,y_m,z_m,pxx_m2,pxy_m2,pxz_m2,pyy_m2,pyz_m2,pzz_m2,latency_s,vx_mps,vy_mps,vz_mps,coop\n"  // 1
+             "1.0,32769,10,20,1.2,0.01,0.002,0,0.02,0,0.04,0.05,1,0,0,0\n"   // 2 ok
+             "1.1,32767,10,20,1.2,0.01,0,0,0.01,0,0.04,,,,,\n"               // 3 an anchor id, not a vehicle
+             "1.1,65535,10,20,1.2,0.01,0,0,0.01,0,0.04,,,,,\n"               // 4 0xFFFF: "no vehicle"
+             "1.1,32769,abc,20,1.2,0.01,0,0,0.01,0,0.04,,,,,\n"              // 5 non-numeric
+             "1.1,32769,10,20,1.2,0.01,nan,0,0.01,0,0.04,,,,,\n"             // 6 NaN
+             "1.1,32769,10,20,1.2,0,0,0,0.01,0,0.04,,,,,\n"                  // 7 zero variance
+             "1.1,32769,10,20,1.2,0.01,0,0,0.01,0,-0.04,,,,,\n"              // 8 negative variance
+             "1.1,32769,10,20,1.2,0.01,0.02,0,0.01,0,0.04,,,,,\n"            // 9 2x2 minor < 0
+             "1.1,32769,10,20,1.2,1,0.9,0.9,1,-0.9,1,,,,,\n"                 // 10 minors > 0, determinant < 0
+             "1.1,32769,10,20,1.2,0.01,0,0,0.01,0,0.04,-0.01,,,,\n"          // 11 latency < 0
+             "1.1,32769,10,20,1.2,0.01,0,0,0.01,0,0.04,61,,,,\n"             // 12 latency above 60 s
+             "1.1,32769,10,20,1.2,0.01,0,0,0.01,0,0.04,0.05,1,,0,\n"         // 13 partial velocity
+             "1.1,32769,10,20,1.2,0.01,0,0,0.01,0,0.04,0.05,,,,2\n"          // 14 coop not 0/1
+             "0.5,32769,10,20,1.2,0.01,0,0,0.01,0,0.04,,,,,\n"               // 15 backwards for its vehicle
+             "0.8,32770,-5,3,1.3,0.01,0,0,0.01,0,0.04,,,,,1\n"               // 16 ok: another vehicle may be earlier
+             "1.2,32769,10,20,1.2,0.01,0,0,0.01\n"                           // 17 column count
+             "2.0,32769,11,21,1.2,0.01,0,0,0.01,0,0.04,,,,,\n"               // 18 ok, empty optional cells
+             "-1,32769,11,21,1.2,0.01,0,0,0.01,0,0.04,,,,,\n");              // 19 t_s < 0
+  Recording rec;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << dump(rep);
+  ASSERT_EQ(rec.neighbours.size(), 3U) << dump(rep);
+  EXPECT_EQ(rep.rows_read, 3U + 3U) << dump(rep);  // anchors + three states
+  EXPECT_EQ(rep.rows_skipped, 15U) << dump(rep);
+  EXPECT_EQ(rep.warnings.size(), 15U) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "neighbours.csv:3:", "vehicle_id: 32767 is not a vehicle id (32768..65534)")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "neighbours.csv:4:", "vehicle_id: out of range")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "neighbours.csv:5:", "x_m: unparsable")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "neighbours.csv:6:", "pxy_m2: not finite")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "neighbours.csv:7:", "pxx_m2: must be > 0")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "neighbours.csv:8:", "pzz_m2: must be > 0")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "neighbours.csv:9:", "not positive definite")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "neighbours.csv:10:", "not positive definite")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "neighbours.csv:11:", "latency_s: negative")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "neighbours.csv:12:", "latency_s: above 60 s")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "neighbours.csv:13:", "velocity partly empty")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "neighbours.csv:14:", "coop: out of range")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "neighbours.csv:15:", "goes backwards for vehicle 32769")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "neighbours.csv:17:", "expected 16 columns, got 9")) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "neighbours.csv:19:", "negative time")) << dump(rep);
+
+  // Arrival order: 0.8 s (vehicle 32770), 1.05 s, 2.0 s.
+  const NeighbourState& b = rec.neighbours[0];
+  EXPECT_EQ(b.vehicle_id, 32770);
+  EXPECT_EQ(b.t_us, 800000U);
+  EXPECT_EQ(b.rx_t_us, b.t_us) << "empty latency_s means 0";
+  EXPECT_TRUE(b.cooperative);
+  EXPECT_TRUE(std::isnan(b.vel_nav_mps.x));
+  const NeighbourState& a = rec.neighbours[1];
+  EXPECT_EQ(a.vehicle_id, 32769);
+  EXPECT_EQ(a.t_us, 1000000U);
+  EXPECT_EQ(a.rx_t_us, 1050000U);
+  EXPECT_EQ(a.pos_nav_m.y, 20.0F);
+  EXPECT_EQ(a.cov_pos_m2[0], 0.01F);
+  EXPECT_EQ(a.cov_pos_m2[1], 0.002F);
+  EXPECT_EQ(a.cov_pos_m2[3], 0.02F);
+  EXPECT_EQ(a.cov_pos_m2[5], 0.04F);
+  EXPECT_EQ(a.vel_nav_mps.x, 1.0F);
+  EXPECT_FALSE(a.cooperative);
+  const NeighbourState& c = rec.neighbours[2];
+  EXPECT_EQ(c.t_us, 2000000U);
+  EXPECT_FALSE(c.cooperative) << "empty coop means 0";
+  EXPECT_TRUE(std::isnan(c.vel_nav_mps.z));
+}
+
+TEST(DatasetReaderNeighbours, LatencyGivesTheArrivalTimeAndStatesAreDeliveredInArrivalOrder) {
+  const std::string dir = scratch_dir();
+  write_file(dir + "/anchors.csv", kAnchorsOk);
+  write_file(dir + "/uwb.csv", "t_s,anchor_id,range_m\n");
+  // Validity order 1.0, 1.0, 1.1, 1.2; the first state is slow (0.25 s) and arrives after the next two.
+  write_file(dir + "/neighbours.csv",
+             "t_s,vehicle_id,x_m,y_m,z_m,pxx_m2,pxy_m2,pxz_m2,pyy_m2,pyz_m2,pzz_m2,latency_s\n"
+             "1.0,32769,1,0,0,0.01,0,0,0.01,0,0.04,0.25\n"
+             "1.0,32770,2,0,0,0.01,0,0,0.01,0,0.04,0.03\n"
+             "1.1,32769,3,0,0,0.01,0,0,0.01,0,0.04,0.05\n"
+             "1.2,32770,4,0,0,0.01,0,0,0.01,0,0.04,0.05\n");
+  Recording rec;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << dump(rep);
+  EXPECT_TRUE(rep.warnings.empty()) << dump(rep);
+  ASSERT_EQ(rec.neighbours.size(), 4U);
+  const uint64_t want_rx[4] = {1030000, 1150000, 1250000, 1250000};
+  const float want_x[4] = {2, 3, 1, 4};  // tie at 1.25 s: the file's order (stable)
+  for (size_t i = 0; i < 4; ++i) {
+    EXPECT_EQ(rec.neighbours[i].rx_t_us, want_rx[i]) << i;
+    EXPECT_EQ(rec.neighbours[i].pos_nav_m.x, want_x[i]) << i;
+    EXPECT_GE(rec.neighbours[i].rx_t_us, rec.neighbours[i].t_us) << i;
+  }
+
+  // The streaming reader holds the same states once the recording is opened.
+  ReadReport rep2;
+  RecordingStream stream;
+  ASSERT_EQ(stream.open(dir, rep2), Status::kOk) << dump(rep2);
+  ASSERT_EQ(stream.neighbours.size(), 4U);
+  for (size_t i = 0; i < 4; ++i) EXPECT_EQ(stream.neighbours[i].rx_t_us, want_rx[i]) << i;
+}
+
+TEST(DatasetReaderNeighbours, RequiredColumnsAloneMeanNoLatencyNoVelocityIndependent) {
+  const std::string dir = scratch_dir();
+  write_file(dir + "/anchors.csv", kAnchorsOk);
+  write_file(dir + "/uwb.csv", "t_s,anchor_id,range_m\n");
+  write_file(dir + "/neighbours.csv",
+             "t_s,vehicle_id,x_m,y_m,z_m,pxx_m2,pxy_m2,pxz_m2,pyy_m2,pyz_m2,pzz_m2\n# comment\n"
+             "5.0,65534,-3.5,7.25,0.5,0.0225,-0.005,0.001,0.01,0.002,0.09\n");
+  Recording rec;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << dump(rep);
+  EXPECT_TRUE(rep.warnings.empty()) << dump(rep);
+  ASSERT_EQ(rec.neighbours.size(), 1U);
+  const NeighbourState& n = rec.neighbours[0];
+  EXPECT_EQ(n.t_us, 5000000U);
+  EXPECT_EQ(n.rx_t_us, n.t_us);
+  EXPECT_EQ(n.vehicle_id, 65534) << "the largest vehicle id";
+  EXPECT_EQ(n.pos_nav_m.x, -3.5F);
+  const float want_cov[6] = {0.0225F, -0.005F, 0.001F, 0.01F, 0.002F, 0.09F};
+  for (size_t i = 0; i < 6; ++i) EXPECT_EQ(n.cov_pos_m2[i], want_cov[i]) << i;
+  EXPECT_TRUE(std::isnan(n.vel_nav_mps.x) && std::isnan(n.vel_nav_mps.y) && std::isnan(n.vel_nav_mps.z));
+  EXPECT_FALSE(n.cooperative);
+
+  // A leading part of the optional columns is a valid header too; a skipped one is not.
+  write_file(dir + "/neighbours.csv",
+             "t_s,vehicle_id,x_m,y_m,z_m,pxx_m2,pxy_m2,pxz_m2,pyy_m2,pyz_m2,pzz_m2,latency_s,vx_mps,vy_mps,vz_mps\n"
+             "5.0,32768,1,2,3,1,0,0,1,0,1,0.02,1,2,0\n");
+  rep = ReadReport{};
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << dump(rep);
+  ASSERT_EQ(rec.neighbours.size(), 1U);
+  EXPECT_EQ(rec.neighbours[0].vehicle_id, kFirstVehicleId) << "the smallest vehicle id";
+  EXPECT_EQ(rec.neighbours[0].rx_t_us, 5020000U);
+  EXPECT_EQ(rec.neighbours[0].vel_nav_mps.y, 2.0F);
+  write_file(dir + "/neighbours.csv",
+             "t_s,vehicle_id,x_m,y_m,z_m,pxx_m2,pxy_m2,pxz_m2,pyy_m2,pyz_m2,pzz_m2,coop\n"
+             "5.0,32768,1,2,3,1,0,0,1,0,1,1\n");
+  rep = ReadReport{};
+  EXPECT_EQ(read_recording(dir, rec, rep), Status::kInvalidArgument);
+  EXPECT_EQ(rep.error.rfind("neighbours.csv:1: wrong header", 0), 0U) << rep.error;
+}
+
+// Ranges to a vehicle's tag (anchor_id >= 32768) are uwb.csv rows like any
+// other: the reader accepts ids 0..65535 and leaves their meaning to the
+// firmware; a recording without neighbours.csv has no neighbour states.
+TEST(DatasetReaderNeighbours, UwbRangesToVehicleIdsReadLikeAnyRangeAndNoFileMeansNoStates) {
+  const std::string dir = scratch_dir();
+  write_file(dir + "/anchors.csv", kAnchorsOk);
+  write_file(dir + "/uwb.csv",
+             "t_s,anchor_id,range_m,tag_id,nlos\n"
+             "0.1,1,5.0,0,0\n"
+             "0.2,32768,12.5,0,0\n"
+             "0.3,32769,20.25,1,1\n"
+             "0.4,65534,7.5,0,\n"
+             "0.5,65535,7.5,0,\n"
+             "0.6,65536,7.5,0,\n");
+  Recording rec;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, rec, rep), Status::kOk) << dump(rep);
+  ASSERT_EQ(rec.uwb.size(), 5U) << dump(rep);
+  EXPECT_EQ(rep.rows_skipped, 1U) << dump(rep);
+  EXPECT_TRUE(has_warning(rep, "uwb.csv:7:", "anchor_id: out of range")) << dump(rep);
+  EXPECT_EQ(rec.uwb[1].range.anchor_id, 32768);
+  EXPECT_TRUE(is_vehicle_id(rec.uwb[1].range.anchor_id));
+  EXPECT_EQ(rec.uwb[2].range.anchor_id, 32769);
+  EXPECT_EQ(rec.uwb[2].range.tag_id, 1);
+  EXPECT_EQ(rec.uwb[2].nlos_label, 1);
+  EXPECT_EQ(rec.uwb[2].range.range_m, 20.25F);
+  EXPECT_TRUE(is_vehicle_id(rec.uwb[3].range.anchor_id));
+  EXPECT_EQ(rec.uwb[4].range.anchor_id, 65535);
+  EXPECT_FALSE(is_vehicle_id(rec.uwb[4].range.anchor_id)) << "0xFFFF names no vehicle";
+  EXPECT_TRUE(rec.neighbours.empty());
 }
 
 }  // namespace

@@ -101,6 +101,57 @@ TEST(ReplaySources, EmptyRecordingIsFinishedAtOnce) {
   EXPECT_EQ(src.imu.poll(1000, s), Status::kEmpty);
 }
 
+NeighbourState neighbour_state(uint16_t id, uint64_t t_us, uint64_t rx_t_us) {
+  NeighbourState n;
+  n.vehicle_id = id;
+  n.t_us = t_us;
+  n.rx_t_us = rx_t_us;
+  n.pos_nav_m = Vec3f{static_cast<float>(t_us) * 1e-3F, 1.0F, 1.2F};
+  return n;
+}
+
+TEST(ReplayNeighbourSource, HandsOutStatesOnceInArrivalOrderOnlyWhenTheyHaveArrived) {
+  dataset::Recording rec = make_recording();
+  // Arrival order, as the reader stores them; the second arrives before its validity's successor.
+  rec.neighbours = {neighbour_state(kFirstVehicleId, 0, 30000), neighbour_state(kFirstVehicleId + 1, 10000, 30000),
+                    neighbour_state(kFirstVehicleId, 20000, 45000), neighbour_state(kFirstVehicleId + 1, 50000, 90000)};
+  ReplaySources src(rec);
+  ASSERT_EQ(src.neighbours_or_null(rec), &src.neighbours);
+  EXPECT_EQ(src.gnss_or_null(rec), nullptr);
+  NeighbourState n;
+  EXPECT_EQ(src.neighbours.poll(29999, n), Status::kEmpty) << "not due at its time of validity";
+  EXPECT_EQ(src.neighbours.next_rx_t_us(), 30000U);
+  std::vector<uint64_t> t;
+  for (uint64_t now = 30000; now <= 100000; now += 10000) {
+    while (src.neighbours.poll(now, n) == Status::kOk) {
+      EXPECT_LE(n.rx_t_us, now);
+      EXPECT_EQ(n.pos_nav_m.x, static_cast<float>(n.t_us) * 1e-3F);
+      t.push_back(n.t_us);
+    }
+    if (now == 30000) {
+      EXPECT_EQ(t.size(), 2U) << "ties at the deadline are due";
+    }
+  }
+  EXPECT_EQ(t, (std::vector<uint64_t>{0, 10000, 20000, 50000}));
+  EXPECT_EQ(src.neighbours.delivered(), 4U);
+  EXPECT_TRUE(src.neighbours.finished());
+  EXPECT_EQ(src.neighbours.poll(UINT64_MAX, n), Status::kEmpty);
+}
+
+TEST(ReplayNeighbourSource, RecordingWithoutNeighboursGivesTheBoardNoSource) {
+  const dataset::Recording rec = make_recording();
+  ReplaySources src(rec);
+  EXPECT_EQ(src.neighbours_or_null(rec), nullptr);
+  EXPECT_TRUE(src.neighbours.finished());
+  const std::vector<NeighbourState> states{neighbour_state(0xFFFE, 5, 7)};
+  ReplayNeighbourSource direct(states);
+  NeighbourState n;
+  EXPECT_EQ(direct.poll(6, n), Status::kEmpty);
+  ASSERT_EQ(direct.poll(7, n), Status::kOk);
+  EXPECT_EQ(n.vehicle_id, 0xFFFE);
+  EXPECT_TRUE(direct.finished());
+}
+
 TEST(LockstepClock, SleepAdvancesTimeButNeverBackwards) {
   LockstepClock clock(500);
   EXPECT_EQ(clock.now_us(), 500U);

@@ -1,5 +1,5 @@
 // Format v1 writer/reader round trips: read(write(x)) reproduces every
-// estimator input bit for bit (GNSS fixes and lever included); replay outputs
+// estimator input bit for bit (GNSS fixes and lever, neighbour states included); replay outputs
 // read back; a one-hour IMU loads fast.
 #include <gtest/gtest.h>
 
@@ -354,6 +354,141 @@ TEST(DatasetRoundTripGnss, RecordingWithoutGnssWritesNoGnssFileNoLeverAndRemoves
   ReadReport rep;
   ASSERT_EQ(read_recording(dir, back, rep), Status::kOk) << dump(rep);
   EXPECT_TRUE(back.gnss.empty());
+}
+
+// Neighbour states of three vehicles with every optional field used somewhere;
+// latencies vary so the arrival order differs from the validity order. In
+// arrival order, as the reader returns them.
+std::vector<NeighbourState> make_neighbours() {
+  std::vector<NeighbourState> states;
+  const uint64_t t0_us = 1723710007000000ULL;
+  for (uint64_t k = 0; k < 60; ++k) {
+    NeighbourState n;
+    n.vehicle_id = static_cast<uint16_t>(k % 3 == 2 ? 0xFFFE : kFirstVehicleId + k % 3);
+    n.t_us = t0_us + (k / 3) * 100000U + (k % 3) * 7U;
+    n.rx_t_us = n.t_us + (k % 4 == 0 ? 230000U : 20000U + k * 1000U);
+    n.pos_nav_m = Vec3f{1.0F / 3.0F + static_cast<float>(k), -123.456F, 0.1F * static_cast<float>(k % 7)};
+    const float cov[6] = {0.01F + 1e-4F * static_cast<float>(k), -0.0F, 1e-7F, 0.0225F, 0.003F, 0.09F};
+    for (size_t i = 0; i < 6; ++i) n.cov_pos_m2[i] = cov[i];
+    if (k % 5 != 1) n.vel_nav_mps = Vec3f{2.5F, -0.0F, 1e-7F * static_cast<float>(k)};
+    n.cooperative = k % 7 == 3;
+    states.push_back(n);
+  }
+  std::stable_sort(states.begin(), states.end(),
+                   [](const NeighbourState& a, const NeighbourState& b) { return a.rx_t_us < b.rx_t_us; });
+  return states;
+}
+
+void expect_same_neighbours(const std::vector<NeighbourState>& a, const std::vector<NeighbourState>& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    const NeighbourState& x = a[i];
+    const NeighbourState& y = b[i];
+    ASSERT_EQ(x.t_us, y.t_us) << i;
+    ASSERT_EQ(x.rx_t_us, y.rx_t_us) << i;
+    ASSERT_EQ(x.vehicle_id, y.vehicle_id) << i;
+    ASSERT_EQ(x.cooperative, y.cooperative) << i;
+    ASSERT_TRUE(same_bits(x.pos_nav_m.x, y.pos_nav_m.x) && same_bits(x.pos_nav_m.y, y.pos_nav_m.y) &&
+                same_bits(x.pos_nav_m.z, y.pos_nav_m.z) && same_bits(x.vel_nav_mps.x, y.vel_nav_mps.x) &&
+                same_bits(x.vel_nav_mps.y, y.vel_nav_mps.y) && same_bits(x.vel_nav_mps.z, y.vel_nav_mps.z))
+        << "neighbour state " << i;
+    for (size_t c = 0; c < 6; ++c) ASSERT_TRUE(same_bits(x.cov_pos_m2[c], y.cov_pos_m2[c])) << i << " cov " << c;
+  }
+}
+
+TEST(DatasetRoundTripNeighbours, NeighbourStatesReadBackBitForBitInArrivalOrder) {
+  std::mt19937 rng(13);
+  Recording rec = make_recording(rng, 200, 100);
+  rec.uwb[3].range.anchor_id = kFirstVehicleId;  // a range to a vehicle's tag
+  rec.uwb[4].range.anchor_id = 0xFFFE;
+  rec.neighbours = make_neighbours();
+  const std::string dir = scratch_dir();
+  ASSERT_EQ(write_recording(dir, rec), Status::kOk);
+  const std::string text = read_text(dir + "/neighbours.csv");
+  EXPECT_EQ(text.substr(0, text.find('\n')),
+            "t_s,vehicle_id,x_m,y_m,z_m,pxx_m2,pxy_m2,pxz_m2,pyy_m2,pyz_m2,pzz_m2,latency_s,vx_mps,vy_mps,vz_mps,coop");
+
+  Recording back;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, back, rep), Status::kOk) << dump(rep);
+  EXPECT_TRUE(rep.warnings.empty()) << dump(rep);
+  expect_same(rec, back);
+  expect_same_neighbours(rec.neighbours, back.neighbours);
+  EXPECT_EQ(back.uwb[3].range.anchor_id, kFirstVehicleId);
+  EXPECT_EQ(back.uwb[4].range.anchor_id, 0xFFFE);
+
+  // Written again from what was read: byte-identical files.
+  const std::string dir2 = dir + "/again";
+  ASSERT_EQ(write_recording(dir2, back), Status::kOk);
+  for (const char* f : {"neighbours.csv", "uwb.csv", "meta.ini"}) {
+    EXPECT_EQ(read_text(dir + "/" + f), read_text(dir2 + "/" + f)) << f;
+  }
+}
+
+TEST(DatasetRoundTripNeighbours, OptionalNeighbourColumnsWrittenOnlyUpToTheLastOneUsed) {
+  Recording rec;
+  ASSERT_EQ(rec.site.add_anchor(1, Vec3f{1, 2, 3}), Status::kOk);
+  ASSERT_EQ(rec.site.add_tag(0, Vec3f{}), Status::kOk);
+  NeighbourState n;
+  n.t_us = 2000000;
+  n.rx_t_us = n.t_us;
+  n.vehicle_id = 32770;
+  n.pos_nav_m = Vec3f{10.5F, -4.0F, 1.25F};
+  const float cov[6] = {0.01F, 0.0F, 0.0F, 0.0225F, 0.0F, 0.25F};
+  for (size_t i = 0; i < 6; ++i) n.cov_pos_m2[i] = cov[i];
+  rec.neighbours.push_back(n);
+  const std::string dir = scratch_dir();
+  ASSERT_EQ(write_recording(dir, rec), Status::kOk);
+  EXPECT_EQ(read_text(dir + "/neighbours.csv"),
+            "t_s,vehicle_id,x_m,y_m,z_m,pxx_m2,pxy_m2,pxz_m2,pyy_m2,pyz_m2,pzz_m2\n"
+            "2.000000,32770,10.5,-4,1.25,0.01,0,0,0.0225,0,0.25\n");
+  EXPECT_EQ(read_text(dir + "/meta.ini").find("gnss_lever_m"), std::string::npos);
+
+  rec.neighbours[0].rx_t_us += 40000;
+  ASSERT_EQ(write_recording(dir, rec), Status::kOk);
+  EXPECT_EQ(read_text(dir + "/neighbours.csv"),
+            "t_s,vehicle_id,x_m,y_m,z_m,pxx_m2,pxy_m2,pxz_m2,pyy_m2,pyz_m2,pzz_m2,latency_s\n"
+            "2.000000,32770,10.5,-4,1.25,0.01,0,0,0.0225,0,0.25,0.040000\n");
+  Recording back;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, back, rep), Status::kOk) << dump(rep);
+  expect_same_neighbours(rec.neighbours, back.neighbours);
+
+  // Velocity on one state only: the others get three empty cells; coop written once one is cooperative.
+  NeighbourState m = rec.neighbours[0];
+  m.t_us += 100000;
+  m.rx_t_us += 100000;
+  m.vel_nav_mps = Vec3f{1.0F, 2.0F, 0.0F};
+  rec.neighbours.push_back(m);
+  ASSERT_EQ(write_recording(dir, rec), Status::kOk);
+  EXPECT_EQ(read_text(dir + "/neighbours.csv"),
+            "t_s,vehicle_id,x_m,y_m,z_m,pxx_m2,pxy_m2,pxz_m2,pyy_m2,pyz_m2,pzz_m2,latency_s,vx_mps,vy_mps,vz_mps\n"
+            "2.000000,32770,10.5,-4,1.25,0.01,0,0,0.0225,0,0.25,0.040000,,,\n"
+            "2.100000,32770,10.5,-4,1.25,0.01,0,0,0.0225,0,0.25,0.040000,1,2,0\n");
+  rec.neighbours[0].cooperative = true;
+  ASSERT_EQ(write_recording(dir, rec), Status::kOk);
+  EXPECT_EQ(read_text(dir + "/neighbours.csv"),
+            "t_s,vehicle_id,x_m,y_m,z_m,pxx_m2,pxy_m2,pxz_m2,pyy_m2,pyz_m2,pzz_m2,latency_s,vx_mps,vy_mps,vz_mps,coop\n"
+            "2.000000,32770,10.5,-4,1.25,0.01,0,0,0.0225,0,0.25,0.040000,,,,1\n"
+            "2.100000,32770,10.5,-4,1.25,0.01,0,0,0.0225,0,0.25,0.040000,1,2,0,0\n");
+  ASSERT_EQ(read_recording(dir, back, rep), Status::kOk) << dump(rep);
+  expect_same_neighbours(rec.neighbours, back.neighbours);
+}
+
+TEST(DatasetRoundTripNeighbours, RecordingWithoutNeighboursWritesNoFileAndRemovesAStaleOne) {
+  std::mt19937 rng(5);
+  Recording rec = make_recording(rng, 10, 10);
+  rec.neighbours = make_neighbours();
+  const std::string dir = scratch_dir();
+  ASSERT_EQ(write_recording(dir, rec), Status::kOk);
+  ASSERT_TRUE(std::filesystem::exists(dir + "/neighbours.csv"));
+  rec.neighbours.clear();
+  ASSERT_EQ(write_recording(dir, rec), Status::kOk);
+  EXPECT_FALSE(std::filesystem::exists(dir + "/neighbours.csv"));
+  Recording back;
+  ReadReport rep;
+  ASSERT_EQ(read_recording(dir, back, rep), Status::kOk) << dump(rep);
+  EXPECT_TRUE(back.neighbours.empty());
 }
 
 TEST(DatasetOutputs, EstimatesWriteAndReadBack) {

@@ -73,7 +73,8 @@ inline bool output_well_formed(const NavOutput& o) {
 // Replays `rec` (IMU and ranges merged by time, output each 10 ms), scoring
 // valid outputs in [t_from_us, t_to_us) (0 = whole run). `params` may be
 // adjusted by the caller. `reports` receives every RangeReport when not null;
-// the recording's GNSS fixes (if any) are fed on arrival, `gnss_reports` gets theirs.
+// the recording's GNSS fixes (if any) are fed on arrival, `gnss_reports` gets theirs;
+// neighbour states (if any) are fed on arrival before the cycle's ranges.
 inline RunScore replay(const dataset::Recording& rec, const Params& params, uint64_t t_from_us = 0,
                        uint64_t t_to_us = UINT64_MAX, std::vector<RangeReport>* reports = nullptr,
                        bool drop_imu = false, std::vector<GnssReport>* gnss_reports = nullptr) {
@@ -90,6 +91,7 @@ inline RunScore replay(const dataset::Recording& rec, const Params& params, uint
   size_t i_imu = 0;
   size_t i_uwb = 0;
   size_t i_gnss = 0;
+  size_t i_nb = 0;
   uint64_t t0 = UINT64_MAX;
   if (!imu.empty()) t0 = imu.front().t_us;
   if (!rec.uwb.empty()) t0 = std::min(t0, rec.uwb.front().range.t_us);
@@ -102,6 +104,14 @@ inline RunScore replay(const dataset::Recording& rec, const Params& params, uint
   size_t axes = 0;
   double sigma_sum = 0;
   for (uint64_t t_cycle = (t0 / kCycleUs + 1) * kCycleUs; t_cycle <= t_end + kCycleUs; t_cycle += kCycleUs) {
+#if UWBNAV_COOP
+    // Neighbour states that arrived, before the cycle's ranges (as firmware/app.cpp).
+    while (i_nb < rec.neighbours.size() && rec.neighbours[i_nb].rx_t_us <= t_cycle) {
+      (void)nav->on_neighbour_state(rec.neighbours[i_nb++]);
+    }
+#else
+    static_cast<void>(i_nb);
+#endif
     while (true) {
       const bool imu_next = i_imu < imu.size() && imu[i_imu].t_us <= t_cycle;
       const bool uwb_next = i_uwb < rec.uwb.size() && rec.uwb[i_uwb].range.t_us <= t_cycle;

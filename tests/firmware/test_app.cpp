@@ -57,6 +57,18 @@ class ScriptGnss final : public hal::GnssSource {
   bool finished() const override { return frames.empty(); }
 };
 
+class ScriptNeighbours final : public hal::NeighbourSource {
+ public:
+  std::deque<NeighbourState> frames;
+  Status poll(uint64_t up_to_us, NeighbourState& out) override {
+    if (frames.empty() || frames.front().rx_t_us > up_to_us) return Status::kEmpty;
+    out = frames.front();
+    frames.pop_front();
+    return Status::kOk;
+  }
+  bool finished() const override { return frames.empty(); }
+};
+
 SiteConfig square_site() {
   SiteConfig s;
   EXPECT_TRUE(ok(s.add_anchor(1, {0, 0, 2})));
@@ -239,6 +251,197 @@ TEST(FirmwareValidation, MalformedGnssFixesAreRejectedPerReasonAndNeverReachTheE
   EXPECT_EQ(app.navigator().diagnostics().gnss_received, 2U);
   EXPECT_EQ(obs.gnss, 2U);
 }
+
+#if UWBNAV_COOP
+NeighbourState neighbour(uint16_t id, uint64_t t_us, uint64_t latency_us) {
+  NeighbourState s;
+  s.vehicle_id = id;
+  s.t_us = t_us;
+  s.rx_t_us = t_us + latency_us;
+  s.pos_nav_m = {30.0F, 10.0F, 1.5F};
+  const float cov[6] = {0.01F, 0.002F, 0.0F, 0.01F, 0.0F, 0.04F};
+  for (size_t k = 0; k < 6; ++k) s.cov_pos_m2[k] = cov[k];
+  s.vel_nav_mps = {1.0F, 0.0F, 0.0F};
+  return s;
+}
+
+TEST(FirmwareValidation, MalformedNeighbourStatesAndVehicleRangesAreRejectedPerReasonAndNeverReachTheEstimator) {
+  const SiteConfig site = square_site();
+  ScriptImu imu;
+  ScriptUwb uwb;
+  ScriptNeighbours nbs;
+  hal::LockstepClock clock;
+  hal::MemCanBus can;
+  hal::NullSerialPort serial;
+  hal::EmptyParamStore store;
+  hal::Board board{imu, uwb, can, serial, clock, store, site};
+  board.neighbours = &nbs;
+
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  constexpr uint16_t kA = 0x8001;
+  constexpr uint16_t kB = 0x8002;
+  nbs.frames.push_back(neighbour(kA, 100000, 20000));   // good
+  NeighbourState s = neighbour(kB, 110000, 20000);
+  s.vehicle_id = 7;
+  nbs.frames.push_back(s);                              // not a vehicle id (an anchor's)
+  s = neighbour(kB, 120000, 20000);
+  s.pos_nav_m.z = nan;
+  nbs.frames.push_back(s);                              // not finite
+  s = neighbour(kB, 130000, 20000);
+  s.vel_nav_mps.x = inf;
+  nbs.frames.push_back(s);                              // not finite: velocity Inf (NaN means "not reported")
+  s = neighbour(kB, 140000, 20000);
+  s.cov_pos_m2[1] = 0.02F;
+  nbs.frames.push_back(s);                              // out of range: covariance not positive definite
+  s = neighbour(kB, 150000, 20000);
+  s.cov_pos_m2[5] = 0.0F;
+  nbs.frames.push_back(s);                              // out of range: zero vertical variance
+  nbs.frames.push_back(neighbour(kB, 100000, 600000));  // out of range: latency 0.6 s > coop.max_age 0.5 s
+  nbs.frames.push_back(neighbour(kB, 700000, 20000));   // good
+  nbs.frames.push_back(neighbour(kB, 700000, 25000));   // duplicate
+  nbs.frames.push_back(neighbour(kB, 650000, 100000));  // out of order for kB
+  nbs.frames.push_back(neighbour(kA, 650000, 100000));  // good: in order for kA
+
+  // Ranges to the vehicles' tags: checked like ranges to anchors, duplicates per vehicle and tag.
+  UwbRange r;
+  r.t_us = 800000;
+  r.anchor_id = kA;
+  r.range_m = 12.0F;
+  uwb.frames.push_back(r);                              // good
+  r.anchor_id = kB;
+  uwb.frames.push_back(r);                              // good: same time, another vehicle
+  uwb.frames.push_back(r);                              // duplicate
+  r.t_us = 810000;
+  r.tag_id = 5;
+  uwb.frames.push_back(r);                              // unknown tag
+  r.tag_id = 0;
+  r.range_m = nan;
+  uwb.frames.push_back(r);                              // not finite
+
+  App app(board);
+  ASSERT_TRUE(ok(app.init()));
+  for (uint64_t t = 10000; t <= 900000; t += 10000) app.tick(t);
+  // A state that arrived 0.79 s before the loop drains it (in.stale_us 0.2 s): stale.
+  nbs.frames.push_back(neighbour(kA, 1000000, 10000));
+  app.tick(1800000);
+
+  const AppStats& st = app.stats();
+  auto rej = [&](RejectReason reason) { return st.neighbours.rejected[static_cast<size_t>(reason)]; };
+  EXPECT_EQ(st.neighbours.received, 12U);
+  EXPECT_EQ(rej(RejectReason::kUnknownAnchor), 1U);
+  EXPECT_EQ(rej(RejectReason::kNotFinite), 2U);
+  EXPECT_EQ(rej(RejectReason::kOutOfRange), 3U);
+  EXPECT_EQ(rej(RejectReason::kDuplicate), 1U);
+  EXPECT_EQ(rej(RejectReason::kOutOfOrder), 1U);
+  EXPECT_EQ(rej(RejectReason::kStale), 1U);
+  EXPECT_EQ(st.neighbours.accepted, 3U);
+  EXPECT_EQ(st.neighbours.accepted + st.neighbours.rejected_total(), st.neighbours.received);
+  EXPECT_EQ(app.navigator().diagnostics().neighbour_states, 3U);
+  auto uwb_rej = [&](RejectReason reason) { return st.uwb.rejected[static_cast<size_t>(reason)]; };
+  EXPECT_EQ(st.uwb.received, 5U);
+  EXPECT_EQ(st.uwb.accepted, 2U);
+  EXPECT_EQ(uwb_rej(RejectReason::kDuplicate), 1U);
+  EXPECT_EQ(uwb_rej(RejectReason::kUnknownTag), 1U);
+  EXPECT_EQ(uwb_rej(RejectReason::kNotFinite), 1U);
+  EXPECT_EQ(uwb_rej(RejectReason::kUnknownAnchor), 0U);  // vehicle ids are not unknown anchors
+  EXPECT_EQ(app.navigator().diagnostics().neighbour_ranges, 2U);
+}
+
+// Neighbour states come over the vehicle bus (V2X_Neighbour*, from the V2X
+// gateway) on ECUs without a HIL rig: the App drains the bus for them even with
+// can.hil_rx_enable = 0, and the HIL sensor groups stay ignored.
+TEST(FirmwareCoop, NeighbourStatesFromTheVehicleBusReachTheEstimatorWithoutHilAndHilSensorsDoNot) {
+  const SiteConfig site = square_site();
+  ScriptImu imu;
+  ScriptUwb uwb;
+  hal::LockstepClock clock;
+  hal::MemCanBus can;
+  hal::NullSerialPort serial;
+  hal::EmptyParamStore store;
+  hal::Board board{imu, uwb, can, serial, clock, store, site};
+  App app(board);
+  ASSERT_TRUE(ok(app.init()));
+  ASSERT_LT(app.params()[ParamId::kCanHilRxEnable], 0.5F);
+
+  hal::CanFrame frames[can::kCoopFrames];
+  ASSERT_FALSE(can::encode_coop(neighbour(0x8003, 100000, 0), can::CoopGroup::kNeighbour, 0, frames));
+  for (hal::CanFrame& f : frames) {
+    f.t_us = 105000;
+    can.inject(f);
+  }
+  // A HIL IMU frame on the same bus: not a sensor on this ECU.
+  hal::CanFrame hil;
+  hil.id = can::id_of(can::MsgId::kHilImuAccel);
+  hil.len = 8;
+  can.inject(hil);
+  app.tick(110000);
+  app.tick(120000);
+
+  EXPECT_EQ(app.stats().neighbours.received, 1U);
+  EXPECT_EQ(app.stats().neighbours.accepted, 1U);
+  EXPECT_EQ(app.navigator().diagnostics().neighbour_states, 1U);
+  EXPECT_EQ(app.stats().can_rx.received, 0U) << "HIL sensor frames are not accepted with HIL off";
+}
+
+// With coop.vehicle_id set, the App broadcasts its own state (UWBNAV_Coop*) at
+// its tag antenna once it has a position; without one it stays silent.
+TEST(FirmwareCoop, OwnStateIsBroadcastAtTheTagOnceThePositionIsValidAndNeverBefore) {
+  const SiteConfig site = square_site();
+  ScriptImu imu;
+  ScriptUwb uwb;
+  hal::LockstepClock clock;
+  hal::MemCanBus can;
+  hal::NullSerialPort serial;
+  hal::EmptyParamStore store;
+  hal::Board board{imu, uwb, can, serial, clock, store, site};
+  App app(board);
+  ASSERT_TRUE(ok(app.init()));
+  ASSERT_TRUE(ok(app.set_param(ParamId::kCoopVehicleId, 4.0F)));
+
+  // At rest with the body origin at (8, 6, 0): the tag (lever 0, 0, 1) is at (8, 6, 1).
+  const float tag[3] = {8.0F, 6.0F, 1.0F};
+  const float anchors[4][3] = {{0, 0, 2}, {20, 0, 2}, {20, 20, 2}, {0, 20, 2}};
+  constexpr uint64_t kEnd = 20000000;
+  for (uint64_t t = 5000; t <= kEnd; t += 5000) imu.frames.push_back(rest_imu(t));
+  for (uint64_t t = 50000; t <= kEnd; t += 50000) {
+    const size_t a = (t / 50000) % 4;
+    const float dx = anchors[a][0] - tag[0];
+    const float dy = anchors[a][1] - tag[1];
+    const float dz = anchors[a][2] - tag[2];
+    uwb.frames.push_back(range(t, static_cast<uint16_t>(a + 1), std::sqrt(dx * dx + dy * dy + dz * dz)));
+  }
+  auto sent_coop = [&](std::vector<hal::CanFrame>& out) {
+    hal::CanFrame f;
+    while (ok(can.receive_sent(f))) {
+      if (f.id >= can::coop_id(can::CoopGroup::kOwn, 0) && f.id < can::coop_id(can::CoopGroup::kOwn, can::kCoopFrames)) {
+        out.push_back(f);
+      }
+    }
+  };
+  std::vector<hal::CanFrame> before;
+  app.tick(10000);
+  sent_coop(before);
+  EXPECT_TRUE(before.empty()) << "no position yet: no state to offer the neighbours";
+
+  std::vector<hal::CanFrame> coop;
+  for (uint64_t t = 20000; t <= kEnd; t += 10000) {
+    app.tick(t);
+    sent_coop(coop);
+  }
+  ASSERT_GE(coop.size(), can::kCoopFrames * 10U);
+  ASSERT_EQ(coop.size() % can::kCoopFrames, 0U);
+  hal::CanFrame group[can::kCoopFrames];
+  for (size_t k = 0; k < can::kCoopFrames; ++k) group[k] = coop[coop.size() - can::kCoopFrames + k];
+  NeighbourState d;
+  ASSERT_EQ(can::decode_coop(group, can::CoopGroup::kOwn, kEnd, d), Status::kOk);
+  EXPECT_EQ(d.vehicle_id, 0x8004);
+  EXPECT_NEAR(d.pos_nav_m.x, tag[0], 0.1F);
+  EXPECT_NEAR(d.pos_nav_m.y, tag[1], 0.1F);
+  EXPECT_NEAR(d.pos_nav_m.z, tag[2], 0.3F);
+  EXPECT_FALSE(d.cooperative) << "no neighbour ranges were fused";
+}
+#endif
 
 TEST(FirmwareHeap, NoHeapAllocationAfterStartUpDuringLongLockstepReplay) {
   if (!alloc_counter::hooks_active()) GTEST_SKIP() << "allocation hooks disabled under AddressSanitizer";

@@ -336,6 +336,32 @@ TEST(Hil, ClockMappedGnssFixesAreDueAtTheirArrivalAndKeepTheirLatency) {
   EXPECT_TRUE(gnss.finished());
 }
 
+TEST(Hil, ClockMappedNeighbourStatesAreDueAtTheirArrivalAndKeepTheirLatency) {
+  dataset::Recording rec = short_parking_nlos(2.0);
+  NeighbourState n;
+  n.t_us = rec.imu.front().t_us + 500000;
+  n.rx_t_us = n.t_us + 40000;  // 40 ms latency
+  n.vehicle_id = kFirstVehicleId + 1;
+  n.pos_nav_m = {30.0F, 4.0F, 1.2F};
+  for (float& c : n.cov_pos_m2) c = 0.0F;
+  n.cov_pos_m2[0] = n.cov_pos_m2[3] = 0.01F;
+  n.cov_pos_m2[5] = 0.04F;
+  rec.neighbours.push_back(n);
+  const hil::TimeMap map = hil::map_recording_to_clock(rec, 9000000000ULL, 1.0);
+  hal::ReplaySources src(rec);
+  hil::ClockMappedNeighbourSource neighbours(src.neighbours, map);
+  const uint64_t rx_clock = map.to_clock_us(n.rx_t_us);
+  NeighbourState out;
+  EXPECT_EQ(neighbours.poll(map.to_clock_us(n.t_us), out), Status::kEmpty);
+  EXPECT_EQ(neighbours.poll(rx_clock - 1, out), Status::kEmpty);
+  ASSERT_TRUE(ok(neighbours.poll(rx_clock, out)));
+  EXPECT_EQ(out.rx_t_us, rx_clock);
+  EXPECT_EQ(out.rx_t_us - out.t_us, 40000U) << "both times mapped: the latency is kept";
+  EXPECT_EQ(out.vehicle_id, kFirstVehicleId + 1);
+  EXPECT_EQ(out.pos_nav_m.x, 30.0F);
+  EXPECT_TRUE(neighbours.finished());
+}
+
 // issue 18: `uwbnav hil --max-latency-ms 5` passed a run whose largest latency
 // was 27.5 ms because it checked the p99. The max and the p99 are separate checks.
 TEST(HilChecks, MaxLatencyBoundsTheLargestLatencyAndP99IsASeparateCheck) {

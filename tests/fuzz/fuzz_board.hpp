@@ -52,6 +52,21 @@ class VectorGnssSource final : public hal::GnssSource {
   bool finished() const override { return next >= fixes.size(); }
 };
 
+#if UWBNAV_COOP
+// Neighbour states in vector order, each due at its arrival time (rx_t_us).
+class VectorNeighbourSource final : public hal::NeighbourSource {
+ public:
+  std::vector<NeighbourState> states;
+  size_t next = 0;
+  Status poll(uint64_t up_to_us, NeighbourState& out) override {
+    if (next >= states.size() || states[next].rx_t_us > up_to_us) return Status::kEmpty;
+    out = states[next++];
+    return Status::kOk;
+  }
+  bool finished() const override { return next >= states.size(); }
+};
+#endif
+
 class SinkCanBus final : public hal::CanBus {
  public:
   Status send(const hal::CanFrame&) override {

@@ -1,6 +1,8 @@
 // libFuzzer target: the firmware's CAN sensor-frame decoder (HIL IMU/UWB input,
-// E2E checks, multi-frame grouping, 32-bit time unwrap) on arbitrary frames.
-// Input: records of [id selector, len, flags, dt, payload (len bytes, max 64)].
+// V2X_Neighbour states with UWBNAV_COOP, E2E checks, multi-frame grouping,
+// 32-bit time unwrap) on arbitrary frames.
+// Input: records of [id selector, len, flags, dt, payload (len bytes, max 64)];
+// flags bit 7 toggles the decoder's HIL input (set_hil_enabled) before the frame.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -13,7 +15,10 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace uwbnav;
-  static constexpr uint32_t kIds[] = {0x0A0, 0x0A1, 0x0A2, 0x0B0, 0x0B1, 0x100, 0x105};
+  // Selectors 0..6 as before (HIL inputs, two outputs); then the V2X_Neighbour
+  // parts and our own UWBNAV_CoopTime (not an input).
+  static constexpr uint32_t kIds[] = {0x0A0, 0x0A1, 0x0A2, 0x0B0, 0x0B1, 0x100, 0x105,
+                                      0x0C0, 0x0C1, 0x0C2, 0x0C3, 0x0C4, 0x0C5, 0x110};
   fuzz::ByteReader in(data, size);
   Params params;
   can::CanSensorDecoder dec;
@@ -25,7 +30,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const uint8_t sel = in.u8();
     f.id = (sel & 0x80U) != 0 ? (static_cast<uint32_t>(sel & 0x7FU) << 4) : kIds[sel % (sizeof kIds / sizeof kIds[0])];
     f.len = static_cast<uint8_t>(in.u8() % 65U);
-    f.flags = static_cast<uint8_t>(in.u8() & 0x0FU);
+    const uint8_t flags = in.u8();
+    f.flags = static_cast<uint8_t>(flags & 0x0FU);
+#if UWBNAV_COOP
+    if ((flags & 0x80U) != 0) dec.set_hil_enabled(!dec.hil_enabled());
+#endif
     now_us += static_cast<uint64_t>(in.u8()) * 1000U;
     f.t_us = now_us;
     for (uint8_t i = 0; i < f.len; ++i) f.data[i] = in.u8();
@@ -42,6 +51,20 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         }
       } else if (out.kind == can::SensorKind::kUwb) {
         if (!std::isfinite(out.uwb.range_m)) std::abort();
+#if UWBNAV_COOP
+      } else if (out.kind == can::SensorKind::kNeighbour) {
+        // Integer encoding: position, covariance and (reported) velocity are finite.
+        const NeighbourState& n = out.neighbour;
+        if (!std::isfinite(n.pos_nav_m.x) || !std::isfinite(n.pos_nav_m.y) || !std::isfinite(n.pos_nav_m.z)) {
+          std::abort();
+        }
+        for (float c : n.cov_pos_m2) {
+          if (!std::isfinite(c)) std::abort();
+        }
+        if (std::isinf(n.vel_nav_mps.x) || std::isinf(n.vel_nav_mps.y) || std::isinf(n.vel_nav_mps.z)) std::abort();
+        if (n.rx_t_us != now_us) std::abort();
+        if (n.cov_pos_m2[0] < 0.0F || n.cov_pos_m2[3] < 0.0F || n.cov_pos_m2[5] < 0.0F) std::abort();
+#endif
       } else {
         std::abort();  // kOk without a sample
       }
@@ -50,6 +73,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
   }
   const can::CanSensorStats& s = dec.stats();
-  if (s.imu_samples + s.uwb_ranges != delivered) std::abort();
+  uint32_t counted = s.imu_samples + s.uwb_ranges;
+#if UWBNAV_COOP
+  counted += s.neighbour_states;
+#endif
+  if (counted != delivered) std::abort();
   return 0;
 }

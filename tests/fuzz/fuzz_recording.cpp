@@ -1,9 +1,11 @@
 // libFuzzer target: the format v1 recording reader, one file type per input.
 // First byte selects the file the rest of the input becomes (anchors, tags,
-// uwb, imu, truth, meta.ini, uwb.csv.gz, site calibration text, gnss.csv); the
-// other files of the recording are fixed and valid. A read that succeeds must
-// hold only finite, time-ordered rows within the table capacities, and GNSS
-// fixes with positive sigmas, arriving no earlier than their validity, in arrival order.
+// uwb, imu, truth, meta.ini, uwb.csv.gz, site calibration text, gnss.csv,
+// neighbours.csv); the other files of the recording are fixed and valid. A read
+// that succeeds must hold only finite, time-ordered rows within the table
+// capacities, GNSS fixes with positive sigmas and neighbour states of vehicle ids
+// with positive definite covariances, arriving no earlier than their validity,
+// in arrival order.
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -68,6 +70,20 @@ void check(const uwbnav::dataset::Recording& rec) {
     last = g.rx_t_us;
   }
   if (!std::isfinite(rec.site.gnss_lever_body_m.x) || !std::isfinite(rec.site.gnss_lever_body_m.z)) std::abort();
+  last = 0;
+  for (const auto& n : rec.neighbours) {
+    if (!is_vehicle_id(n.vehicle_id) || n.rx_t_us < n.t_us || n.rx_t_us < last) std::abort();
+    if (!std::isfinite(n.pos_nav_m.x) || !std::isfinite(n.pos_nav_m.y) || !std::isfinite(n.pos_nav_m.z)) std::abort();
+    for (float c : n.cov_pos_m2) {
+      if (!std::isfinite(c)) std::abort();
+    }
+    const double xx = static_cast<double>(n.cov_pos_m2[0]);
+    const double xy = static_cast<double>(n.cov_pos_m2[1]);
+    const double yy = static_cast<double>(n.cov_pos_m2[3]);
+    if (!(xx > 0.0) || !(yy > 0.0) || !(n.cov_pos_m2[5] > 0.0F) || !(xx * yy - xy * xy > 0.0)) std::abort();
+    if (std::isfinite(n.vel_nav_mps.x) != std::isfinite(n.vel_nav_mps.z)) std::abort();
+    last = n.rx_t_us;
+  }
 }
 
 }  // namespace
@@ -76,7 +92,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace uwbnav;
   if (size == 0 || size > 65536) return 0;
   static const char* kFiles[] = {"anchors.csv", "tags.csv", "uwb.csv", "imu.csv", "truth.csv", "meta.ini"};
-  const uint8_t sel = data[0] % 9U;
+  const uint8_t sel = data[0] % 10U;
   ++data;
   --size;
   if (sel == 7) {
@@ -97,12 +113,16 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   put("truth.csv", "t_s,x_m,y_m,z_m\n1.0,5,5,0\n");
   put("meta.ini", "name = fuzz\ngnss_lever_m = 0.5,0,1.5\n");
   put("gnss.csv", "t_s,x_m,y_m,z_m,sx_m,sy_m,sz_m,fix,num_sv,latency_s\n1.0,5,5,1.5,0.8,0.8,1.6,2,12,0.08\n");
+  put("neighbours.csv",
+      "t_s,vehicle_id,x_m,y_m,z_m,pxx_m2,pxy_m2,pxz_m2,pyy_m2,pyz_m2,pzz_m2,latency_s\n1.0,32769,15,5,1.2,0.01,0,0,0.01,0,0.04,0.05\n");
   drop("uwb.csv.gz");
   if (sel == 6) {
     drop("uwb.csv");
     put("uwb.csv.gz", data, size);
   } else if (sel == 8) {
     put("gnss.csv", data, size);
+  } else if (sel == 9) {
+    put("neighbours.csv", data, size);
   } else {
     put(kFiles[sel], data, size);
   }

@@ -1,11 +1,13 @@
-// libFuzzer target: arbitrary IMU/UWB/GNSS sample sequences through the firmware
+// libFuzzer target: arbitrary IMU/UWB/GNSS/neighbour sequences through the firmware
 // (App::tick: InputValidator, then the estimator). Whenever the output status
 // says valid, position, velocity, attitude and claimed sigmas must be finite
 // and bounded; anything else aborts (a finding).
 // Input: 1 header byte (bit 0 has IMU, bit 1 air platform, bit 2 GNSS antenna
 // on a 1.2 m mast), then records: 1 tag byte (bit 0 UWB or GNSS else IMU, bit 1
 // raw float bits + signed time step, bits 2-7 time step [ms]) and its payload;
-// a UWB record whose first payload byte is >= 192 is a GNSS fix (docs/hardening.md).
+// a UWB record whose first payload byte is >= 192 is a GNSS fix, 128..159 a
+// neighbour vehicle's state, 160..191 a range to a neighbour's tag
+// (docs/hardening.md).
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -102,6 +104,47 @@ uwbnav::GnssFix gnss_record(ByteReader& in, uint64_t t_us, bool raw, bool with_v
   return f;
 }
 
+#if UWBNAV_COOP
+// One neighbour state (`who` 128..159): bits 0-1 the vehicle (0x8001..0x8004),
+// bit 2 an id from the input instead (anchor ids and 0xFFFF included), bit 3
+// the state's own "cooperative" flag, bit 4 no velocity. Scaled integers, or
+// raw float bits for position, covariance and velocity (any value, arrival
+// before validity included) when `raw`.
+uwbnav::NeighbourState neighbour_record(ByteReader& in, uint64_t t_us, bool raw, uint8_t who) {
+  using namespace uwbnav;
+  NeighbourState s;
+  s.t_us = t_us;
+  s.vehicle_id = (who & 4U) != 0 ? in.u16() : static_cast<uint16_t>(0x8001U + (who & 3U));
+  s.cooperative = (who & 8U) != 0;
+  if (raw) {
+    s.pos_nav_m = Vec3f{in.f32_bits(), in.f32_bits(), in.f32_bits()};
+    for (float& c : s.cov_pos_m2) c = in.f32_bits();
+    const int64_t latency_us = static_cast<int64_t>(static_cast<int16_t>(in.u16())) * 100;
+    s.rx_t_us = latency_us < 0 && static_cast<uint64_t>(-latency_us) > t_us ? 0 : t_us + static_cast<uint64_t>(latency_us);
+    if ((who & 16U) == 0) s.vel_nav_mps = Vec3f{in.f32_bits(), in.f32_bits(), in.f32_bits()};
+  } else {
+    const auto p = [&] { return static_cast<float>(static_cast<int16_t>(in.u16())) * 0.01F; };
+    const float x = p();
+    const float y = p();
+    const float z = p();
+    s.pos_nav_m = Vec3f{x, y, z};
+    const float sh = static_cast<float>(in.u8()) * 0.01F;  // 0 included: not positive definite
+    const float sv = static_cast<float>(in.u8()) * 0.01F;
+    const float rho = static_cast<float>(static_cast<int8_t>(in.u8())) / 100.0F;  // |rho| up to 1.28
+    const float cov[6] = {sh * sh, rho * sh * sh, 0.0F, sh * sh, 0.0F, sv * sv};
+    for (size_t k = 0; k < 6; ++k) s.cov_pos_m2[k] = cov[k];
+    s.rx_t_us = t_us + static_cast<uint64_t>(in.u8()) * 4000U;  // 0..1020 ms latency
+    if ((who & 16U) == 0) {
+      const float vx = p();
+      const float vy = p();
+      const float vz = p();
+      s.vel_nav_mps = Vec3f{vx, vy, vz};
+    }
+  }
+  return s;
+}
+#endif
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -115,7 +158,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   fuzz::VectorUwbSource uwb;
   int64_t t_us = static_cast<int64_t>(kStartUs);
   fuzz::VectorGnssSource gnss;
-  while (in.left() > 0 && imu.samples.size() + uwb.ranges.size() + gnss.fixes.size() < 4096) {
+#if UWBNAV_COOP
+  fuzz::VectorNeighbourSource neighbours;
+  const auto records = [&] { return imu.samples.size() + uwb.ranges.size() + gnss.fixes.size() + neighbours.states.size(); };
+#else
+  const auto records = [&] { return imu.samples.size() + uwb.ranges.size() + gnss.fixes.size(); };
+#endif
+  while (in.left() > 0 && records() < 4096) {
     const uint8_t tag = in.u8();
     const bool raw = (tag & 2U) != 0;
     int64_t dt_ms = tag >> 2;
@@ -151,6 +200,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       UwbRange r;
       r.t_us = t;
       r.anchor_id = static_cast<uint16_t>(who % 6U);  // 1..4 known, 0 and 5 unknown
+#if UWBNAV_COOP
+      if (who >= 128U && who < 160U) {
+        neighbours.states.push_back(neighbour_record(in, t, raw, who));
+        continue;
+      }
+      if (who >= 160U) r.anchor_id = static_cast<uint16_t>(0x8001U + (who & 3U));  // a neighbour's tag
+#endif
       r.tag_id = static_cast<uint8_t>((who >> 3) & 1U);  // 1 unknown
       if (raw) {
         r.range_m = in.f32_bits();
@@ -172,12 +228,18 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   fuzz::StepClock clock;
   fuzz::BlobParamStore store;
   hal::Board board{imu, uwb, can, serial, clock, store, site, &gnss};
+#if UWBNAV_COOP
+  board.neighbours = &neighbours;
+#endif
   auto app = std::make_unique<App>(board);
   if (!ok(app->init())) return 0;
   uint64_t last_t = kStartUs;
   for (const auto& s : imu.samples) last_t = s.t_us > last_t ? s.t_us : last_t;
   for (const auto& r : uwb.ranges) last_t = r.t_us > last_t ? r.t_us : last_t;
   for (const auto& f : gnss.fixes) last_t = f.rx_t_us > last_t && f.rx_t_us < UINT64_MAX / 2 ? f.rx_t_us : last_t;
+#if UWBNAV_COOP
+  for (const auto& s : neighbours.states) last_t = s.rx_t_us > last_t && s.rx_t_us < UINT64_MAX / 2 ? s.rx_t_us : last_t;
+#endif
   uint64_t now = (kStartUs / kCyclePeriodUs) * kCyclePeriodUs;
   size_t valid = 0;
   for (size_t tick = 0; tick < kMaxTicks && now <= last_t + 200000; ++tick, now += kCyclePeriodUs) {
@@ -197,6 +259,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                  st.imu.accepted, st.imu.rejected_total(), st.uwb.accepted, st.uwb.rejected_total());
     std::fprintf(stderr, "fuzz_sequence: gnss accepted %u rejected %u, fused %u\n", st.gnss.accepted,
                  st.gnss.rejected_total(), app->navigator().diagnostics().gnss_used);
+#if UWBNAV_COOP
+    std::fprintf(stderr, "fuzz_sequence: neighbour states accepted %u rejected %u, vehicle ranges %u fused %u\n",
+                 st.neighbours.accepted, st.neighbours.rejected_total(), app->navigator().diagnostics().neighbour_ranges,
+                 app->navigator().diagnostics().neighbour_used);
+#endif
   }
   return 0;
 }

@@ -31,9 +31,11 @@ void u16(Bytes& b, int v) {
 
 // fuzz_can_decoder records: selector, len, flags, dt [ms], payload.
 void frame(Bytes& b, const uwbnav::hal::CanFrame& f, uint8_t dt_ms) {
-  static constexpr uint32_t kIds[] = {0x0A0, 0x0A1, 0x0A2, 0x0B0, 0x0B1, 0x100, 0x105};
+  // The selector table of tests/fuzz/fuzz_can_decoder.cpp.
+  static constexpr uint32_t kIds[] = {0x0A0, 0x0A1, 0x0A2, 0x0B0, 0x0B1, 0x100, 0x105,
+                                      0x0C0, 0x0C1, 0x0C2, 0x0C3, 0x0C4, 0x0C5, 0x110};
   uint8_t sel = 0;
-  for (uint8_t i = 0; i < 7; ++i) {
+  for (uint8_t i = 0; i < sizeof kIds / sizeof kIds[0]; ++i) {
     if (kIds[i] == f.id) sel = i;
   }
   b.push_back(sel);
@@ -70,13 +72,61 @@ Bytes can_seed(size_t n) {
   return b;
 }
 
+#if UWBNAV_COOP
+// V2X_Neighbour groups of `n` states from three vehicles in turn (10 Hz each,
+// one with velocity not reported, one cooperative), interleaved with HIL IMU
+// samples when `with_imu`; the last group misses a part.
+Bytes neighbour_seed(size_t n, bool with_imu) {
+  using namespace uwbnav;
+  can::CanSensorEncoder enc;
+  Bytes b;
+  uint8_t counter = 0;
+  for (size_t i = 0; i < n; ++i) {
+    NeighbourState s;
+    s.t_us = 1000000 + i * 33000;
+    s.vehicle_id = static_cast<uint16_t>(kFirstVehicleId + 1 + i % 3);
+    const float a = 0.05F * static_cast<float>(i);
+    s.pos_nav_m = Vec3f{15.0F + 10.0F * std::cos(a), 15.0F + 10.0F * std::sin(a), 1.2F};
+    s.vel_nav_mps = i % 3 == 1 ? Vec3f{kNaNf, kNaNf, kNaNf} : Vec3f{-0.5F * std::sin(a), 0.5F * std::cos(a), 0.0F};
+    const float sx = 0.05F + 0.01F * static_cast<float>(i % 4), sy = 0.07F, sz = 0.3F;
+    s.cov_pos_m2[0] = sx * sx;
+    s.cov_pos_m2[1] = 0.2F * sx * sy;
+    s.cov_pos_m2[2] = 0.0F;
+    s.cov_pos_m2[3] = sy * sy;
+    s.cov_pos_m2[4] = 0.0F;
+    s.cov_pos_m2[5] = sz * sz;
+    s.cooperative = i % 3 == 2;
+    hal::CanFrame g[can::kCoopFrames];
+    (void)can::encode_coop(s, can::CoopGroup::kNeighbour, counter, g);
+    counter = can::next_alive_counter(counter);
+    for (size_t k = 0; k < can::kCoopFrames; ++k) {
+      if (i + 1 == n && k == 3) continue;  // a lost part: incomplete group
+      frame(b, g[k], k == 0 ? 11 : 0);
+      if (with_imu && k == 2) {
+        ImuSample m;
+        m.t_us = s.t_us;
+        m.accel_body_mps2 = Vec3f{0.1F, -0.05F, 9.81F};
+        m.gyro_body_radps = Vec3f{0.001F, 0.0F, 0.02F};
+        hal::CanFrame imu[can::kImuFrames];
+        (void)enc.encode_imu(m, imu);
+        for (const auto& f : imu) frame(b, f, 0);
+      }
+    }
+  }
+  return b;
+}
+#endif
+
 // fuzz_sequence: a vehicle in the 30 m anchor square driving along +x at
 // `speed_mps` from (5, 15, 0) (heading 0, so an IMU at constant velocity reads
 // gravity only), IMU every 10 ms, a range every 25 ms (anchors 1..4 in turn).
 // Moving, the filter acquires its heading and reaches status valid.
 // With `with_gnss` the antenna (1.2 m mast, 0.5 m ahead) sends a DGNSS fix
-// every 200 ms, 100 ms late, with velocity.
-Bytes sequence_seed(bool with_imu, double seconds, double speed_mps, bool with_gnss = false) {
+// every 200 ms, 100 ms late, with velocity. With `with_neighbours` a car
+// (0x8001) parked with its tag at (20, 5, 1) broadcasts its state every 100 ms,
+// 40 ms late, and is ranged every 100 ms.
+Bytes sequence_seed(bool with_imu, double seconds, double speed_mps, bool with_gnss = false,
+                    bool with_neighbours = false) {
   Bytes b;
   b.push_back(static_cast<uint8_t>((with_imu ? 1 : 0) | (with_gnss ? 4 : 0)));
   const double ax[4] = {0, 30, 30, 0};
@@ -114,6 +164,31 @@ Bytes sequence_seed(bool with_imu, double seconds, double speed_mps, bool with_g
       b.push_back(2);   // DGNSS
       b.push_back(11);  // satellites
     }
+    if (with_neighbours && ms % 100 == 50) {
+      b.push_back(static_cast<uint8_t>((since << 2) | 1));
+      since = 0;
+      b.push_back(128);  // state of 0x8001, with velocity
+      u16(b, 2000);
+      u16(b, 500);
+      u16(b, 100);
+      b.push_back(10);  // sigma_h 0.1 m
+      b.push_back(20);  // sigma_v 0.2 m
+      b.push_back(0);   // rho_xy 0
+      b.push_back(10);  // 40 ms latency
+      u16(b, 0);
+      u16(b, 0);
+      u16(b, 0);
+    }
+    if (with_neighbours && ms % 100 == 60) {
+      b.push_back(static_cast<uint8_t>((since << 2) | 1));
+      since = 0;
+      b.push_back(160);  // range to 0x8001's tag from tag 0
+      const double x = 5.0 + speed_mps * ms * 1e-3;
+      const double r = std::sqrt((x - 20.0) * (x - 20.0) + 100.0);
+      u16(b, static_cast<int>(std::lround(r * 1000.0)));
+      b.push_back(164);
+      b.push_back(159);
+    }
     if (ms % 25 == 0) {
       b.push_back(static_cast<uint8_t>((since << 2) | 1));
       since = 0;
@@ -139,6 +214,10 @@ int main(int argc, char** argv) {
   }
   const std::string dir = argv[1];
   bool good = write(dir + "/fuzz_can_decoder/imu_uwb_valid", can_seed(24));
+#if UWBNAV_COOP
+  good = good && write(dir + "/fuzz_can_decoder/neighbour_valid", neighbour_seed(8, false));
+  good = good && write(dir + "/fuzz_can_decoder/neighbour_imu_interleaved", neighbour_seed(6, true));
+#endif
   Params p;
   uint8_t blob[kParamBlobMaxBytes];
   size_t n = param_blob_write(p, blob, sizeof blob);
@@ -149,6 +228,9 @@ int main(int argc, char** argv) {
   good = good && write(dir + "/fuzz_sequence/static_imu_uwb", sequence_seed(true, 6.0, 2.0));
   good = good && write(dir + "/fuzz_sequence/static_uwb_only", sequence_seed(false, 3.0, 0.0));
   good = good && write(dir + "/fuzz_sequence/drive_imu_uwb_gnss", sequence_seed(true, 6.0, 2.0, true));
+#if UWBNAV_COOP
+  good = good && write(dir + "/fuzz_sequence/drive_imu_uwb_neighbour", sequence_seed(true, 6.0, 2.0, false, true));
+#endif
   if (!good) {
     std::fprintf(stderr, "fuzz_make_seeds: cannot write under %s (create the target folders)\n", dir.c_str());
     return 1;

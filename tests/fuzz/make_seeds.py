@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Writes the text seed corpora of the fuzz targets: one valid file per
 recording file type for fuzz_recording (first byte selects the type, 6 is
-uwb.csv.gz, 7 a site calibration file, 8 gnss.csv) and console sessions for fuzz_console.
+uwb.csv.gz, 7 a site calibration file, 8 gnss.csv, 9 neighbours.csv) and console sessions for fuzz_console.
 Usage: tests/fuzz/make_seeds.py CORPUS_DIR"""
 import gzip
 import os
@@ -21,6 +21,9 @@ RECORDING = {
     8: ("t_s,x_m,y_m,z_m,sx_m,sy_m,sz_m,fix,num_sv,latency_s,vx_mps,vy_mps,vz_mps,sv_mps\n"
         "1.0,5,5,1.5,0.8,0.8,1.6,2,12,0.08,1.5,0,0,0.05\n1.2,,,,,,,0,0,,,,,\n"
         "1.4,5.3,5,1.5,1.6,1.6,3.2,1,6,0.12,1.5,0.1,0,0.1\n1.6,5.6,5.1,1.4,0.8,0.8,1.6,2,11,,,,,\n"),
+    9: ("t_s,vehicle_id,x_m,y_m,z_m,pxx_m2,pxy_m2,pxz_m2,pyy_m2,pyz_m2,pzz_m2,latency_s,vx_mps,vy_mps,vz_mps,coop\n"
+        "1.0,32769,15,5,1.2,0.01,0.002,0,0.0225,0,0.04,0.05,5,0,0,0\n1.05,32770,-10,5.3,1.3,0.04,0,0,0.01,0,0.09,0.03,,,,1\n"
+        "1.1,32769,15.5,5,1.2,0.01,0.002,0,0.0225,0,0.04,,5,0.1,0,\n"),
 }
 CONSOLE = [
     "help\r", "status\r\nstats\r\nanchors\r\n", "param list\rparam get gate.policy\rparam set gate.policy 2\r",

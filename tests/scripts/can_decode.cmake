@@ -16,7 +16,8 @@ if(TARGET uwbnav_tests_can)
     FIXTURES_SETUP can_fixture_log)
   add_test(NAME can_decode_fixture_log_with_python_can_and_canmatrix
     COMMAND ${UWBNAV_PYTHON3} ${can_decode_py} --dbc ${can_dbc}
-      --log ${can_fixture_dir}/can.log --estimates ${can_fixture_dir}/estimates.csv --min-positions 500)
+      --log ${can_fixture_dir}/can.log --estimates ${can_fixture_dir}/estimates.csv --min-positions 500
+      --min-coop-groups 48 --coop-tag-at-origin)
   set_tests_properties(can_decode_fixture_log_with_python_can_and_canmatrix PROPERTIES
     FIXTURES_REQUIRED can_fixture_log)
   # Negative controls: the checker must catch a flipped bit, a missing frame, a moved estimate.

@@ -10,7 +10,12 @@ canmatrix using docs/uwbnav.dbc, and checks:
     estimates.csv with the same time (UWBNAV_NavTime) within half the DBC
     resolution, or is clipped and flagged (Saturated) when out of range / empty;
   * the status signals equal the estimates.csv status;
-  * the observed period of each cyclic message equals its GenMsgCycleTime.
+  * the observed period of each cyclic message equals its GenMsgCycleTime;
+  * cooperative state groups (UWBNAV_Coop*, when the log has them): the six
+    parts follow UWBNAV_CoopTime in the same cycle with its alive counter,
+    Coop_Valid = 1, the estimates.csv row at Coop_TimeUs has status valid or
+    degraded, and velocities and sigmas match it within half the DBC resolution
+    (positions too with --coop-tag-at-origin: the tag lever arm is zero).
 Usage: can_decode.py --dbc docs/uwbnav.dbc --log OUT/can.log --estimates OUT/estimates.csv
 Exit status 0 when every check passes, 1 otherwise. --mutate {crc,counter,position}
 corrupts the input in memory (negative controls: the check must then fail).
@@ -45,6 +50,15 @@ COMPARED = {
 }
 STATUS_SIGNALS = {"UWBNAV_PosXY": "PosXY_Status", "UWBNAV_PosZ": "PosZ_Status"}
 NAV_TIME = "UWBNAV_NavTime"
+COOP_TIME = "UWBNAV_CoopTime"
+# Cooperative state parts -> (signal, estimates.csv column, is a tag position).
+COOP_COMPARED = {
+    "UWBNAV_CoopPosX": [("Coop_PosX", "x_m", True), ("Coop_VelX", "vx_mps", False)],
+    "UWBNAV_CoopPosY": [("Coop_PosY", "y_m", True), ("Coop_VelY", "vy_mps", False)],
+    "UWBNAV_CoopPosZ": [("Coop_PosZ", "z_m", True), ("Coop_VelZ", "vz_mps", False)],
+    "UWBNAV_CoopSigma": [("Coop_SigmaX", "sx_m", False), ("Coop_SigmaY", "sy_m", False), ("Coop_SigmaZ", "sz_m", False)],
+    "UWBNAV_CoopCorr": [],
+}
 # Frames paired with NavTime by equal alive counter (docs/can.md).
 SAME_COUNTER_AS_NAV_TIME = ("UWBNAV_PosXY", "UWBNAV_PosZ", "UWBNAV_VelHdg")
 
@@ -73,13 +87,16 @@ def read_estimates(path):
 
 
 class Checker:
-    def __init__(self, db, estimates):
+    def __init__(self, db, estimates, coop_tag_at_origin=False):
         self.db = db
         self.estimates = estimates
+        self.by_t32 = {t & 0xFFFFFFFF: row for t, row in estimates.items()}
+        self.coop_tag_at_origin = coop_tag_at_origin
+        self.coop = None  # (log timestamp, Coop_TimeUs, counter) of the latest UWBNAV_CoopTime
         self.frames_by_id = {f.arbitration_id.id: f for f in db.frames}
         self.errors = []
         self.counts = {"frames": 0, "crc_ok": 0, "compared": 0, "saturated": 0, "positions": 0,
-                       "error_frames": 0}
+                       "error_frames": 0, "coop_groups": 0}
         self.last_counter = {}
         self.stamps = {}
         self.group = None  # (log timestamp, nav_t_us, counter) of the latest NavTime
@@ -127,6 +144,15 @@ class Checker:
         if frame.name == NAV_TIME:
             self.group = (msg.timestamp, int(decoded["NavTime_Us"].raw_value), counter)
             return
+        if frame.name == COOP_TIME:
+            self.coop = (msg.timestamp, int(decoded["Coop_TimeUs"].raw_value), counter)
+            self.counts["coop_groups"] += 1
+            if decoded["Coop_Valid"].raw_value != 1:
+                self.fail("t=%.6f %s: Coop_Valid=0 from UWBNAV" % (msg.timestamp, frame.name))
+            return
+        if frame.name in COOP_COMPARED:
+            self.check_coop_part(msg, frame, decoded, counter, saturated)
+            return
         if frame.name not in COMPARED:
             return
         if self.group is None or abs(self.group[0] - msg.timestamp) > 1e-7:
@@ -171,6 +197,39 @@ class Checker:
         if expect_flag and not saturated:
             self.fail("t=%d us %s: out-of-range/empty value but Saturated=0" % (nav_t_us, frame.name))
 
+    def check_coop_part(self, msg, frame, decoded, counter, saturated):
+        if self.coop is None or abs(self.coop[0] - msg.timestamp) > 1e-7:
+            self.fail("t=%.6f %s: no UWBNAV_CoopTime frame in the same cycle" % (msg.timestamp, frame.name))
+            return
+        if counter != self.coop[2]:
+            self.fail("t=%.6f %s: counter %d differs from CoopTime's %d" % (msg.timestamp, frame.name, counter, self.coop[2]))
+        row = self.by_t32.get(self.coop[1])
+        if row is None:
+            self.fail("%s: no estimates.csv row with low 32 bits of t = %d us" % (frame.name, self.coop[1]))
+            return
+        if row["status"].strip() not in ("1", "2"):
+            self.fail("%s: sent for an estimate with status %s (only valid/degraded)" % (frame.name, row["status"]))
+        if saturated:
+            self.counts["saturated"] += 1
+        for sig_name, column, is_position in COOP_COMPARED[frame.name]:
+            if is_position and not self.coop_tag_at_origin:
+                continue
+            sig = frame.signal_by_name(sig_name)
+            factor = float(sig.factor)
+            raw = decoded[sig_name].raw_value
+            phys = float(decoded[sig_name].phys_value)
+            cell = row[column].strip()
+            if cell == "":
+                if sig_name.startswith("Coop_Vel") and raw == -(1 << (int(sig.size) - 1)):
+                    continue  # not reported: the code, not a value
+                if not saturated:
+                    self.fail("%s: %s empty in estimates.csv but sent as %r without Saturated" % (frame.name, column, phys))
+                continue
+            self.counts["compared"] += 1
+            if abs(phys - float(cell)) > factor / 2 + 1e-9:
+                self.fail("t=%d us %s: %s=%r, estimates.csv %s=%s (resolution %g)" %
+                          (self.coop[1], frame.name, sig_name, phys, column, cell, factor))
+
     def check_periods(self):
         for frame in self.db.frames:
             stamps = self.stamps.get(frame.name, [])
@@ -187,6 +246,9 @@ def main():
     ap.add_argument("--log", required=True)
     ap.add_argument("--estimates", required=True)
     ap.add_argument("--min-positions", type=int, default=1, help="fail when fewer PosXY frames were checked")
+    ap.add_argument("--min-coop-groups", type=int, default=0, help="fail when fewer UWBNAV_Coop* groups were checked")
+    ap.add_argument("--coop-tag-at-origin", action="store_true",
+                    help="the publisher's tag lever arm is zero: compare Coop_Pos* with the estimates too")
     ap.add_argument("--mutate", choices=["crc", "counter", "position"],
                     help="negative control: flip a payload bit / drop a frame / move one estimate by 2 mm")
     args = ap.parse_args()
@@ -204,7 +266,7 @@ def main():
     if args.mutate == "position":
         row = estimates[sorted(estimates)[len(estimates) // 2]]
         row["x_m"] = repr(float(row["x_m"]) + 0.002)
-    checker = Checker(db, estimates)
+    checker = Checker(db, estimates, args.coop_tag_at_origin)
     for index, msg in enumerate(can.CanutilsLogReader(args.log)):
         if args.mutate == "counter" and index == 100:
             continue
@@ -215,13 +277,15 @@ def main():
 
     c = checker.counts
     print("can_decode: python-can %s, canmatrix %s, %d frames, %d CRCs verified, %d PosXY frames, "
-          "%d values compared, %d saturated frames, %d error frames, %d estimates rows"
+          "%d coop groups, %d values compared, %d saturated frames, %d error frames, %d estimates rows"
           % (can.__version__, getattr(canmatrix, "__version__", "?"), c["frames"], c["crc_ok"], c["positions"],
-             c["compared"], c["saturated"], c["error_frames"], len(checker.estimates)))
+             c["coop_groups"], c["compared"], c["saturated"], c["error_frames"], len(checker.estimates)))
     for name in sorted(checker.last_counter):
         print("  %-16s %6d frames" % (name, len(checker.stamps[name])))
     if c["positions"] < args.min_positions:
         checker.fail("only %d PosXY frames checked (need %d)" % (c["positions"], args.min_positions))
+    if c["coop_groups"] < args.min_coop_groups:
+        checker.fail("only %d UWBNAV_Coop* groups checked (need %d)" % (c["coop_groups"], args.min_coop_groups))
     if checker.errors:
         print("can_decode: %d check(s) failed" % len(checker.errors))
         return 1

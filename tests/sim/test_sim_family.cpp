@@ -1,5 +1,6 @@
 // Scenario family: every cell draws valid, reproducible drives inside its
-// ranges (anchors, schedules, trolley, multicopter, outages, blockages, GNSS road).
+// ranges (anchors, schedules, trolley, multicopter, outages, blockages, GNSS road);
+// the cells that existed before coop_canyon draw the same drives as before.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -29,9 +30,11 @@ TEST(SimFamily, CellListHasTheRequiredCells) {
     EXPECT_FALSE(c.description.empty()) << c.name;
   }
   for (const char* n : {"ground_los", "ground_nlos", "ground_hard", "ground_survey15", "ground_blocked",
-                        "ground_sparse", "air_indoor", "air_sparse", "trolley3", "outage", "ground_gnss"}) {
+                        "ground_sparse", "air_indoor", "air_sparse", "trolley3", "outage", "ground_gnss",
+                        "coop_canyon"}) {
     EXPECT_EQ(names.count(n), 1U) << n;
   }
+  EXPECT_EQ(family_cells().back().name, "coop_canyon") << "new cells go last: the table order of the others stays";
 }
 
 TEST(SimFamily, EveryCellDrawsValidScenariosWithinItsAnchorArea) {
@@ -47,7 +50,7 @@ TEST(SimFamily, EveryCellDrawsValidScenariosWithinItsAnchorArea) {
       ASSERT_FALSE(out.rec.uwb.empty()) << c.name;
       EXPECT_EQ(out.rec.meta.at("sim_family"), c.name + ":" + std::to_string(seed));
       // The route stays within a turning circle of the anchors' bounding box
-      // (ground_gnss: of the road, which runs up to 600 m past its anchors on purpose).
+      // (ground_gnss, coop_canyon: of the road, which runs up to 600 / 350 m past its anchors on purpose).
       double lo[2] = {1e9, 1e9};
       double hi[2] = {-1e9, -1e9};
       for (const AnchorDef& a : out.scenario.anchors) {
@@ -57,6 +60,7 @@ TEST(SimFamily, EveryCellDrawsValidScenariosWithinItsAnchorArea) {
         }
       }
       if (c.name == "ground_gnss") hi[0] = std::max(hi[0], 600.0);
+      if (c.name == "coop_canyon") hi[0] = std::max(hi[0], 350.0);
       for (const TruthState& t : out.truth) {
         for (int i = 0; i < 2; ++i) {
           ASSERT_GT(t.pos_nav_m[i], lo[i] - 12.0) << c.name << ":" << seed;
@@ -273,6 +277,67 @@ TEST(SimFamily, GnssCellDrawsARoadWithAnchorsAtOneEndAndGnssWithinItsRanges) {
     fast.fast = true;
     ASSERT_EQ(draw_family_scenario("ground_gnss", seed, fast, sc, &err), Status::kOk) << err;
     EXPECT_LE(sc.duration_s, 150.0);
+  }
+}
+
+// A fingerprint of one drive that survives last-bit differences between libm
+// builds: the drawn scenario (description, 3 significant digits), the row
+// counts of every stream, the NLOS labels and the ranges summed to 1 mm.
+struct DriveFingerprint {
+  const char* cell;
+  const char* description;
+  size_t imu, uwb, nlos, gnss;
+  long long range_sum_mm;
+};
+
+DriveFingerprint fingerprint(const std::string& cell, const SimOutput& out) {
+  DriveFingerprint f{cell.c_str(), nullptr, out.rec.imu.size(), out.rec.uwb.size(), 0, out.rec.gnss.size(), 0};
+  double sum_m = 0.0;
+  for (const auto& row : out.rec.uwb) {
+    f.nlos += row.nlos_label == 1 ? 1U : 0U;
+    sum_m += static_cast<double>(row.range.range_m);
+  }
+  f.range_sum_mm = std::llround(sum_m * 1e3);
+  return f;
+}
+
+// The cells that existed before coop_canyon draw exactly the drives they drew
+// then (fast drives of seed 1): adding a cell, a scenario section or a random
+// stream must never change them.
+TEST(SimFamily, ExistingCellsDrawTheSameDrivesAsBefore) {
+  const DriveFingerprint want[] = {
+      {"ground_los", "ground_los seed 1: road 295x22.9 m, 4 anchors, 29.3 Hz per anchor, sigma 0.0966 m, NLOS episodes 0 %, 0 boxes, IMU 132 ug/rtHz, 0 outages",
+        6000, 6860, 0, 0, 837169974},
+      {"ground_nlos", "ground_nlos seed 1: lot 68.8x27 m, 4 anchors, 31.8 Hz per anchor, sigma 0.0771 m, NLOS episodes 25.8 %, body NLOS, 4 boxes, IMU 178 ug/rtHz, 0 outages",
+        6000, 7392, 4773, 0, 257778433},
+      {"ground_hard", "ground_hard seed 1: lot 91x27 m, 7 anchors, 47.7 Hz per anchor, sigma 0.115 m, NLOS episodes 27.3 %, body NLOS, 1 boxes, IMU 145 ug/rtHz, 0 outages",
+        6000, 16884, 4901, 0, 808053683},
+      {"ground_survey15", "ground_survey15 seed 1: road 179x15.2 m, 8 anchors, 33 Hz per anchor, sigma 0.116 m, NLOS episodes 8.47 %, 0 boxes, IMU 61.3 ug/rtHz, 0 outages",
+        6000, 15470, 2099, 0, 1204845863},
+      {"ground_blocked", "ground_blocked seed 1: lot 97.8x28.3 m, 4 anchors, 10.2 Hz per anchor, sigma 0.0874 m, NLOS episodes 2.54 %, body NLOS, 0 boxes, IMU 143 ug/rtHz, 0 outages",
+        15000, 5040, 325, 0, 224951494},
+      {"ground_sparse", "ground_sparse seed 1: road 175x17.2 m, 4 anchors, 1.2 Hz per anchor, sigma 0.0555 m, NLOS episodes 17.6 %, 0 boxes, IMU 57.5 ug/rtHz, 0 outages",
+        6000, 276, 54, 0, 21249793},
+      {"air_indoor", "air_indoor seed 1: multicopter 12.6x7.38 m, 6 anchors, 17.6 Hz per anchor, sigma 0.0922 m, NLOS episodes 3.41 %, 0 boxes, IMU 185 ug/rtHz, 0 outages",
+        12000, 6024, 200, 0, 31672030},
+      {"air_sparse", "air_sparse seed 1: multicopter 10.6x9.81 m, 6 anchors, 1.17 Hz total, sigma 0.0679 m, NLOS episodes 12 %, 0 boxes, IMU 317 ug/rtHz, 0 outages",
+        12000, 70, 12, 0, 455303},
+      {"trolley3", "trolley3 seed 1: trolley 23.5x14.5 m, 8 anchors, 100 Hz frames, sigma 0.05 m, NLOS episodes 2.72 %, 0 boxes, no IMU, 0 outages",
+        0, 142410, 4586, 0, 1803103260},
+      {"outage", "outage seed 1: road 232x17.3 m, 4 anchors, 12.4 Hz per anchor, sigma 0.117 m, NLOS episodes 4.51 %, 0 boxes, IMU 57.1 ug/rtHz, 1 outages",
+        10000, 3466, 172, 0, 373258577},
+      {"ground_gnss", "ground_gnss seed 1: road 359x19.3 m, 4 anchors, 24.6 Hz per anchor, sigma 0.119 m, NLOS episodes 4.99 %, 0 boxes, IMU 58 ug/rtHz, 0 outages, UWB range 95 m, GNSS sigma 1.21 m (claimed x0.957), latency 51 ms, 2 blocked + 2 multipath windows",
+        15000, 6878, 510, 628, 279970927},
+  };
+  for (const DriveFingerprint& w : want) {
+    const SimOutput out = family(w.cell, 1);
+    const DriveFingerprint got = fingerprint(w.cell, out);
+    EXPECT_EQ(out.scenario.description, w.description) << w.cell;
+    EXPECT_EQ(got.imu, w.imu) << w.cell;
+    EXPECT_EQ(got.uwb, w.uwb) << w.cell;
+    EXPECT_EQ(got.nlos, w.nlos) << w.cell;
+    EXPECT_EQ(got.gnss, w.gnss) << w.cell;
+    EXPECT_NEAR(static_cast<double>(got.range_sum_mm), static_cast<double>(w.range_sum_mm), 2.0) << w.cell;
   }
 }
 

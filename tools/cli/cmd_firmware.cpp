@@ -392,13 +392,15 @@ int cmd_firmware(int argc, char** argv) {
     hil::ClockMappedImuSource mapped_imu(replay_sources.imu, map);
     hil::ClockMappedUwbSource mapped_uwb(replay_sources.uwb, map);
     hil::ClockMappedGnssSource mapped_gnss(replay_sources.gnss, map);
+    hil::ClockMappedNeighbourSource mapped_neighbours(replay_sources.neighbours, map);
     hal::IdleImuSource no_imu;
     hal::IdleUwbSource no_uwb;
     hal::ImuSource& imu = replay ? static_cast<hal::ImuSource&>(mapped_imu) : no_imu;
     hal::UwbSource& uwb = replay ? static_cast<hal::UwbSource&>(mapped_uwb) : no_uwb;
 
     hal::Board board{imu, uwb, *bus, *serial, clock, *store, rec.site,
-                     replay && !rec.gnss.empty() ? &mapped_gnss : nullptr};
+                     replay && !rec.gnss.empty() ? &mapped_gnss : nullptr,
+                     replay && !rec.neighbours.empty() ? &mapped_neighbours : nullptr};
     auto app = std::make_unique<App>(board);
     if (!ok(app->init())) {
       std::fprintf(stderr, "uwbnav firmware: the firmware rejected the site of %s (anchors/tags or range calibration)\n",

@@ -92,6 +92,20 @@ int replay_and_report(const std::string& dir, const std::string& out, const Args
                 static_cast<unsigned long long>(result.gnss_rejected),
                 static_cast<unsigned long>(result.stats.gnss.rejected_total()));
   }
+#if UWBNAV_COOP
+  if (result.stats.neighbours.received > 0 || result.diag.neighbour_ranges > 0) {
+    // What became of the neighbours' states and the ranges to them (docs/ekf.md
+    // "Neighbour ranges"; per reason: console `stats src=neighbours`, `stats coop`).
+    uint64_t refused = 0;
+    for (uint32_t n : result.diag.neighbour_rejected) refused += n;
+    std::printf("neighbours: %lu states received, %lu refused by input validation; %lu ranges to vehicles, %lu fused, "
+                "%llu refused by the estimator\n",
+                static_cast<unsigned long>(result.stats.neighbours.received),
+                static_cast<unsigned long>(result.stats.neighbours.rejected_total()),
+                static_cast<unsigned long>(result.diag.neighbour_ranges),
+                static_cast<unsigned long>(result.diag.neighbour_used), static_cast<unsigned long long>(refused));
+  }
+#endif
   std::printf("outputs: %s/{estimates.csv, ranges.csv, can.log}\n", out.c_str());
   int rc = 0;
   if (result.solution_epochs == 0) {

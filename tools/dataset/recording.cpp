@@ -58,6 +58,7 @@ Status read_recording(const std::string& dir, Recording& out, ReadReport& report
   out.meta = std::move(stream.meta);
   out.site = stream.site;
   out.gnss = std::move(stream.gnss);
+  out.neighbours = std::move(stream.neighbours);
   st = drain(stream.uwb, out.uwb, report);
   if (ok(st)) st = drain(stream.imu, out.imu, report);
   if (ok(st)) st = drain(stream.truth, out.truth, report);

@@ -42,6 +42,7 @@ struct Recording {
   std::vector<UwbRow> uwb;
   std::vector<TruthRow> truth;              // empty when the recording has no truth
   std::vector<GnssFix> gnss;                // gnss.csv, in arrival (rx_t_us) order; empty without a receiver
+  std::vector<NeighbourState> neighbours;   // neighbours.csv, in arrival (rx_t_us) order; empty without neighbours
   std::string name() const;                 // meta "name" or the directory's last component
 };
 

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <map>
 #include <system_error>
 
 #include "tools/dataset/tables.hpp"
@@ -15,11 +16,14 @@ namespace uwbnav::dataset {
 
 namespace {
 
-constexpr uint64_t kMaxAnchorId = 0xFFFF;  // UwbRange::anchor_id is uint16_t
+// UwbRange::anchor_id is uint16_t: uwb.csv accepts 0..65535; ids kFirstVehicleId..0xFFFE
+// name a neighbour vehicle's tag (neighbours.csv), the reader passes them on like any id.
+constexpr uint64_t kMaxAnchorId = 0xFFFF;
 constexpr uint64_t kMaxTagId = 0xFF;       // UwbRange::tag_id is uint8_t
 constexpr uint64_t kMaxNumSv = 0xFF;       // GnssFix::num_sv is uint8_t
 constexpr double kMaxGnssLatencyS = 60.0;  // gnss.csv latency_s accepted up to [s]
 constexpr double kMaxGnssLeverM = 100.0;   // meta.ini gnss_lever_m, per axis [m]
+constexpr double kMaxNeighbourLatencyS = 60.0;  // neighbours.csv latency_s accepted up to [s]
 
 std::string trimmed(const std::string& s) {
   size_t b = 0;
@@ -312,6 +316,68 @@ bool parse_row(csv::Table& t, GnssFix& fix, std::string& reason) {
   return true;
 }
 
+bool parse_row(csv::Table& t, NeighbourState& ns, std::string& reason) {
+  ns = NeighbourState{};
+  uint64_t id = 0;
+  if (!t.parse_time(0, ns.t_us) || !t.parse_uint(1, kNoVehicleId - 1U, id)) return false;
+  if (!is_vehicle_id(static_cast<uint16_t>(id))) {
+    reason = "vehicle_id: " + std::to_string(id) + " is not a vehicle id (" + std::to_string(kFirstVehicleId) + ".." +
+             std::to_string(kNoVehicleId - 1U) + ")";
+    return false;
+  }
+  ns.vehicle_id = static_cast<uint16_t>(id);
+  ns.rx_t_us = ns.t_us;
+  if (!t.parse_float(2, ns.pos_nav_m.x) || !t.parse_float(3, ns.pos_nav_m.y) || !t.parse_float(4, ns.pos_nav_m.z)) {
+    return false;
+  }
+  for (size_t i = 0; i < 6; ++i) {
+    if (!t.parse_float(5 + i, ns.cov_pos_m2[i])) return false;
+  }
+  // Positive definite: positive diagonal, positive 2x2 principal minors and determinant.
+  double c[6];
+  for (size_t i = 0; i < 6; ++i) c[i] = static_cast<double>(ns.cov_pos_m2[i]);
+  const double xx = c[0], xy = c[1], xz = c[2], yy = c[3], yz = c[4], zz = c[5];
+  for (size_t i : {size_t{0}, size_t{3}, size_t{5}}) {
+    if (!(c[i] > 0.0)) {
+      reason = std::string(tables::kNeighbours.required[5 + i]) + ": must be > 0 (a variance)";
+      return false;
+    }
+  }
+  const double det = xx * (yy * zz - yz * yz) - xy * (xy * zz - yz * xz) + xz * (xy * yz - yy * xz);
+  if (!(xx * yy - xy * xy > 0.0) || !(xx * zz - xz * xz > 0.0) || !(yy * zz - yz * yz > 0.0) || !(det > 0.0)) {
+    reason = "covariance not positive definite (a 2x2 minor or the determinant <= 0)";
+    return false;
+  }
+  if (!t.empty(11)) {
+    double latency_s = 0.0;
+    if (!t.parse_double(11, latency_s)) return false;
+    if (latency_s < 0.0) {
+      reason = "latency_s: negative (the state cannot arrive before its time of validity)";
+      return false;
+    }
+    if (latency_s > kMaxNeighbourLatencyS) {
+      reason = "latency_s: above 60 s";
+      return false;
+    }
+    ns.rx_t_us = ns.t_us + seconds_to_us(latency_s);
+  }
+  size_t vel_cells = 0;
+  for (size_t i = 12; i < 15; ++i) vel_cells += t.empty(i) ? 0U : 1U;
+  if (vel_cells == 3) {
+    if (!t.parse_float(12, ns.vel_nav_mps.x) || !t.parse_float(13, ns.vel_nav_mps.y) ||
+        !t.parse_float(14, ns.vel_nav_mps.z)) {
+      return false;
+    }
+  } else if (vel_cells != 0) {
+    reason = "velocity partly empty (give all of vx_mps,vy_mps,vz_mps or none)";
+    return false;
+  }
+  uint64_t coop = 0;
+  if (!t.empty(15) && !t.parse_uint(15, 1, coop)) return false;
+  ns.cooperative = coop != 0;
+  return true;
+}
+
 template <typename Row>
 Status RowStream<Row>::open(const std::string& dir, const char* file, const csv::Columns& cols, bool required,
                             ReadReport& report) {
@@ -445,11 +511,37 @@ Status read_gnss(const std::string& dir, std::vector<GnssFix>& out, ReadReport& 
   return st;
 }
 
+Status read_neighbours(const std::string& dir, std::vector<NeighbourState>& out, ReadReport& report) {
+  out.clear();
+  bool present = false;
+  std::map<uint16_t, uint64_t> last_t_us;  // per vehicle: time of its last good row
+  const Status st = read_small_table(dir, "neighbours.csv", tables::kNeighbours, false, report, present,
+                                     [&](csv::Table& t, std::string& reason) {
+                                       NeighbourState ns;
+                                       if (!parse_row(t, ns, reason)) return false;
+                                       const auto it = last_t_us.find(ns.vehicle_id);
+                                       if (it != last_t_us.end() && ns.t_us < it->second) {
+                                         reason = "t_s: goes backwards for vehicle " + std::to_string(ns.vehicle_id) +
+                                                  " (its previous row t_s=" +
+                                                  std::to_string(us_to_seconds(it->second)) + ")";
+                                         return false;
+                                       }
+                                       last_t_us[ns.vehicle_id] = ns.t_us;
+                                       out.push_back(ns);
+                                       return true;
+                                     });
+  // Consumers take the states as they arrive.
+  std::stable_sort(out.begin(), out.end(),
+                   [](const NeighbourState& a, const NeighbourState& b) { return a.rx_t_us < b.rx_t_us; });
+  return st;
+}
+
 Status RecordingStream::open(const std::string& directory, ReadReport& report, bool with_truth) {
   dir = directory;
   meta.clear();
   site = SiteConfig{};
   gnss.clear();
+  neighbours.clear();
   Status st = read_site(dir, meta, site, report);
   if (!ok(st)) return st;
   st = uwb.open(dir, "uwb.csv", tables::kUwb, true, report);
@@ -458,6 +550,8 @@ Status RecordingStream::open(const std::string& directory, ReadReport& report, b
   if (!ok(st)) return st;
   site.has_imu = imu.peek() != nullptr;
   st = read_gnss(dir, gnss, report);
+  if (!ok(st)) return st;
+  st = read_neighbours(dir, neighbours, report);
   if (!ok(st)) return st;
   if (with_truth) st = truth.open(dir, "truth.csv", tables::kTruth, false, report);
   return st;

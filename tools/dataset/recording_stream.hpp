@@ -1,6 +1,6 @@
 // Streaming reader of a format v1 recording (docs/dataset-format.md): the
-// small tables (meta.ini, anchors.csv, tags.csv and the optional gnss.csv, a
-// few fixes per second) are read whole when the recording is opened; uwb.csv,
+// small tables (meta.ini, anchors.csv, tags.csv and the optional gnss.csv and
+// neighbours.csv, a few rows per second) are read whole when the recording is opened; uwb.csv,
 // imu.csv and truth.csv (or their .csv.gz) are walked one row at a time with
 // one row of look-ahead, so the memory they hold does not depend on the
 // recording's length. read_recording() is built on it: both
@@ -28,6 +28,10 @@ bool parse_row(csv::Table& t, TruthRow& out, std::string& reason);
 // gnss.csv: a fix-0 ("no fix") row is a good row with out.fix == kNone and no
 // position; read_gnss() counts it as read but keeps it out of its output.
 bool parse_row(csv::Table& t, GnssFix& out, std::string& reason);
+// neighbours.csv: checks one row on its own (ids, covariance, latency, velocity,
+// coop flag); it does not call accept_time(): the rows only have to keep time
+// order per vehicle, which read_neighbours() checks.
+bool parse_row(csv::Table& t, NeighbourState& out, std::string& reason);
 
 inline uint64_t row_time_us(const UwbRow& r) { return r.range.t_us; }
 inline uint64_t row_time_us(const ImuSample& s) { return s.t_us; }
@@ -109,7 +113,7 @@ class RowStream final : public RowFeed<Row> {
 // One recording opened for streaming.
 class RecordingStream {
  public:
-  // Reads meta.ini, anchors.csv, tags.csv and gnss.csv and opens uwb.csv,
+  // Reads meta.ini, anchors.csv, tags.csv, gnss.csv and neighbours.csv and opens uwb.csv,
   // imu.csv and (when `with_truth`) truth.csv. Fails as read_recording does for a missing
   // directory or required file, a wrong header or no usable anchor; warnings
   // go to `report`, which must outlive the stream (rows read later add theirs).
@@ -126,6 +130,8 @@ class RecordingStream {
   RowStream<ImuSample> imu;
   RowStream<TruthRow> truth;
   std::vector<GnssFix> gnss;  // gnss.csv read whole at open, in arrival (rx_t_us) order; empty when absent
+  // neighbours.csv read whole at open, in arrival (rx_t_us) order; empty when absent.
+  std::vector<NeighbourState> neighbours;
 };
 
 // Reads the optional gnss.csv (or gnss.csv.gz) of `dir` whole: good rows with a
@@ -133,6 +139,13 @@ class RecordingStream {
 // warning. kOk with `out` empty when the file is absent. Fails (report.error)
 // on a wrong header or a read error, as for imu.csv.
 [[nodiscard]] Status read_gnss(const std::string& dir, std::vector<GnssFix>& out, ReadReport& report);
+
+// Reads the optional neighbours.csv (or neighbours.csv.gz) of `dir` whole: good
+// rows, stably sorted by rx_t_us; bad rows (a row whose t_s goes backwards for
+// its vehicle included) skipped with a "neighbours.csv:line: reason" warning.
+// kOk with `out` empty when the file is absent. Fails (report.error) on a wrong
+// header or a read error, as for imu.csv.
+[[nodiscard]] Status read_neighbours(const std::string& dir, std::vector<NeighbourState>& out, ReadReport& report);
 
 // Reads meta.ini, anchors.csv and tags.csv of `dir` into `meta` and `site`
 // (the part of a recording read whole). Fails as read_recording does.

@@ -16,6 +16,10 @@ inline const csv::Columns kTruth{{"t_s", "x_m", "y_m", "z_m"}, {"qw", "qx", "qy"
 // gnss.csv: an extension of format v1 (docs/dataset-format.md "gnss.csv"); older readers ignore the file.
 inline const csv::Columns kGnss{{"t_s", "x_m", "y_m", "z_m", "sx_m", "sy_m", "sz_m"},
                                 {"fix", "num_sv", "latency_s", "vx_mps", "vy_mps", "vz_mps", "sv_mps"}};
+// neighbours.csv: an extension of format v1 (docs/dataset-format.md "neighbours.csv"); older readers ignore the file.
+inline const csv::Columns kNeighbours{
+    {"t_s", "vehicle_id", "x_m", "y_m", "z_m", "pxx_m2", "pxy_m2", "pxz_m2", "pyy_m2", "pyz_m2", "pzz_m2"},
+    {"latency_s", "vx_mps", "vy_mps", "vz_mps", "coop"}};
 inline const csv::Columns kEstimates{{"t_s", "x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps", "qw",
                                       "qx", "qy", "qz", "sx_m", "sy_m", "sz_m", "status"},
                                      {}};

@@ -1,4 +1,4 @@
-// Format v1 writers (recording directory incl. the gnss.csv extension,
+// Format v1 writers (recording directory incl. the gnss.csv and neighbours.csv extensions,
 // estimates.csv, ranges.csv) and the readers of the replay outputs (docs/dataset-format.md).
 #include <algorithm>
 #include <charconv>
@@ -119,6 +119,39 @@ Status write_gnss(const std::string& path, const std::vector<GnssFix>& fixes) {
       l.sep().sep().sep();  // not reported (all three empty: the reader refuses a partial velocity)
     }
     if (optional >= 7) l.sep().f32(f.vel_sigma_mps);
+  });
+}
+
+bool has_velocity(const NeighbourState& n) {
+  return std::isfinite(n.vel_nav_mps.x) && std::isfinite(n.vel_nav_mps.y) && std::isfinite(n.vel_nav_mps.z);
+}
+
+// neighbours.csv in time-of-validity order (`states` are in arrival order),
+// optional columns up to the last one any state has a value for.
+Status write_neighbours(const std::string& path, const std::vector<NeighbourState>& states) {
+  std::vector<const NeighbourState*> rows;
+  rows.reserve(states.size());
+  size_t optional = 0;
+  for (const NeighbourState& n : states) {
+    rows.push_back(&n);
+    if (n.rx_t_us != n.t_us) optional = std::max<size_t>(optional, 1);
+    if (has_velocity(n)) optional = std::max<size_t>(optional, 4);
+    if (n.cooperative) optional = 5;
+  }
+  std::stable_sort(rows.begin(), rows.end(),
+                   [](const NeighbourState* a, const NeighbourState* b) { return a->t_us < b->t_us; });
+  return write_table(path, tables::kNeighbours, optional, rows.size(), [&](size_t i, csv::LineBuilder& l) {
+    const NeighbourState& n = *rows[i];
+    l.time(n.t_us).sep().u64(n.vehicle_id);
+    l.sep().f32(n.pos_nav_m.x).sep().f32(n.pos_nav_m.y).sep().f32(n.pos_nav_m.z);
+    for (float c : n.cov_pos_m2) l.sep().f32(c);
+    if (optional >= 1) l.sep().time(n.rx_t_us >= n.t_us ? n.rx_t_us - n.t_us : 0);  // rx before t: written as 0
+    if (optional >= 4 && has_velocity(n)) {
+      l.sep().f32(n.vel_nav_mps.x).sep().f32(n.vel_nav_mps.y).sep().f32(n.vel_nav_mps.z);
+    } else if (optional >= 4) {
+      l.sep().sep().sep();  // not reported (all three empty: the reader refuses a partial velocity)
+    }
+    if (optional >= 5) l.sep().u64(n.cooperative ? 1U : 0U);
   });
 }
 
@@ -250,6 +283,13 @@ Status write_recording(const std::string& dir, const Recording& rec) {
     if (st != Status::kOk) return st;
   } else {
     remove_stale(dir + "/gnss.csv");
+  }
+
+  if (!rec.neighbours.empty()) {
+    st = write_neighbours(dir + "/neighbours.csv", rec.neighbours);
+    if (st != Status::kOk) return st;
+  } else {
+    remove_stale(dir + "/neighbours.csv");
   }
 
   return write_meta(dir + "/meta.ini", rec);

@@ -132,10 +132,39 @@ DriveMetrics drive_metrics(const dataset::Recording& rec, const ReplayResult& re
     m.longest_gap_s = std::max(m.longest_gap_s, static_cast<double>(est.back().t_us - last_good) * 1e-6);
   }
 
+  // Sparse anchors: epochs inside a stretch of at least kSparseMinS during which
+  // fewer than 3 distinct anchors (vehicle ids excluded) were heard within
+  // kHeardWindowUs before each epoch.
+  constexpr uint64_t kHeardWindowUs = 2000000;
+  constexpr double kSparseMinS = 20.0;
+  std::vector<char> sparse(est.size(), 0);
+  {
+    std::map<uint16_t, uint64_t> heard_us;  // anchor id -> last time heard
+    size_t next_row = 0;
+    for (size_t i = 0; i < est.size(); ++i) {
+      const uint64_t t_us = est[i].t_us;
+      while (next_row < rec.uwb.size() && rec.uwb[next_row].range.t_us <= t_us) {
+        const UwbRange& r = rec.uwb[next_row++].range;
+        if (!is_vehicle_id(r.anchor_id)) heard_us[r.anchor_id] = r.t_us;
+      }
+      size_t n = 0;
+      for (const auto& kv : heard_us) n += kv.second + kHeardWindowUs >= t_us ? 1U : 0U;
+      sparse[i] = n < 3 ? 1 : 0;
+    }
+    for (size_t i = 0; i < est.size();) {
+      size_t j = i;
+      while (j < est.size() && sparse[j] == sparse[i]) ++j;
+      const double span_s = static_cast<double>(est[j - 1].t_us - est[i].t_us) * 1e-6;
+      if (sparse[i] != 0 && span_s < kSparseMinS) std::fill(sparse.begin() + static_cast<long>(i), sparse.begin() + static_cast<long>(j), 0);
+      i = j;
+    }
+  }
+
   // Accuracy and honesty against truth.
   std::vector<double> h_err;
   h_err.reserve(m.good);
-  for (const auto& e : est) {
+  for (size_t i = 0; i < est.size(); ++i) {
+    const dataset::EstimateRow& e = est[i];
     if (!is_good(e)) continue;
     double p[3];
     if (!truth_at(rec.truth, e.t_us, p)) continue;
@@ -150,6 +179,12 @@ DriveMetrics drive_metrics(const dataset::Recording& rec, const ReplayResult& re
     }
     const double sx = e.pos_sigma_m[0];
     const double sy = e.pos_sigma_m[1];
+    if (sparse[i] != 0) {
+      ++m.sparse_n;
+      m.sparse_sq_sum += h * h;
+      m.sparse_max_m = std::max(m.sparse_max_m, h);
+      m.sparse_in2s_xy += (std::fabs(ex) <= 2.0 * sx ? 1U : 0U) + (std::fabs(ey) <= 2.0 * sy ? 1U : 0U);
+    }
     if (!(std::isfinite(sx) && std::isfinite(sy) && sx > 0.0 && sy > 0.0)) continue;
     ++m.hon_n;
     m.in2s_h += h <= 2.0 * std::sqrt(sx * sx + sy * sy) ? 1 : 0;
@@ -202,8 +237,8 @@ CellSummary summarise_cell(const std::string& name, const std::vector<DriveMetri
   c.name = name;
   std::vector<double> rmse, mx, p95, ttfe;
   size_t epochs = 0, good = 0, hon = 0, in_h = 0, in_x = 0, in_y = 0, nees_n = 0, nees_in = 0, nis_n = 0, nis_in = 0;
-  size_t err_n = 0, fb_n = 0;
-  double err_sq = 0.0;
+  size_t err_n = 0, fb_n = 0, sp_n = 0, sp_in = 0;
+  double err_sq = 0.0, sp_sq = 0.0;
   double nees_sum = 0, nis_sum = 0, fb_sq = 0;
   uint64_t resets = 0, reinits = 0, inflations = 0, reanchors = 0, used = 0, rejected = 0;
   Confusion conf;
@@ -239,6 +274,10 @@ CellSummary summarise_cell(const std::string& name, const std::vector<DriveMetri
     reanchors += d.recoveries.reanchors;
     fb_n += d.fallback_n;
     fb_sq += d.fallback_sq_sum;
+    sp_n += d.sparse_n;
+    sp_sq += d.sparse_sq_sum;
+    sp_in += d.sparse_in2s_xy;
+    c.sparse_max = std::max(c.sparse_max, d.sparse_max_m);
     used += d.ranges_used;
     rejected += d.ranges_rejected;
     conf.add(d.nlos);
@@ -267,6 +306,10 @@ CellSummary summarise_cell(const std::string& name, const std::vector<DriveMetri
   c.inertial_rmse =
       err_n > fb_n ? std::sqrt(std::max(err_sq - fb_sq, 0.0) / static_cast<double>(err_n - fb_n)) : std::nan("");
   c.fused_share = ratio(static_cast<double>(used), static_cast<double>(used + rejected));
+  c.sparse_share = ratio(static_cast<double>(sp_n), static_cast<double>(err_n));
+  c.sparse_rmse = sp_n > 0 ? std::sqrt(sp_sq / static_cast<double>(sp_n)) : std::nan("");
+  c.sparse_in2s = ratio(static_cast<double>(sp_in), 2.0 * static_cast<double>(sp_n));
+  if (sp_n == 0) c.sparse_max = std::nan("");
   c.nlos_precision = conf.precision();
   c.nlos_recall = conf.recall();
   return c;
@@ -348,6 +391,16 @@ void print_family_tables(std::FILE* f, const std::vector<CellSummary>& rows, boo
               {"cell", "in 2sig h", "in 2sig x", "in 2sig y", "NEES mean", "NEES<=5.99", "NIS mean", "NIS<=3.84",
                "resets/h", "inflate/h", "re-anchor/h", "re-align/h", "fallback", "fallback RMSE [m]", "IMU filter RMSE [m]", "fused", "NLOS P", "NLOS R"},
               t2, markdown);
+  // Sparse anchors (cells where the vehicle sometimes hears fewer than 3 anchors).
+  std::vector<std::vector<std::string>> t3;
+  for (const CellSummary& c : rows) {
+    if (!(c.sparse_share > 0.0)) continue;
+    t3.push_back({c.name, pct(c.sparse_share), num(c.sparse_rmse, 3), num(c.sparse_max, 2), pct(c.sparse_in2s)});
+  }
+  if (t3.empty()) return;
+  std::fprintf(f, "\n%sWhere fewer than 3 anchors are heard for 20 s or more (< 3 distinct anchors ranged in the 2 s before each epoch; pooled)%s\n\n",
+               markdown ? "**" : "", markdown ? "**" : "");
+  print_table(f, {"cell", "share of epochs", "RMSE [m]", "MAX worst [m]", "in 2sig x,y"}, t3, markdown);
 }
 
 int run_eval_family(int argc, char** argv) {

@@ -53,6 +53,12 @@ struct DriveMetrics {
   // Fallback: good epochs with truth whose mode is not the inertial filter.
   size_t fallback_n = 0;
   double fallback_sq_sum = 0.0;
+  // Sparse anchors: good epochs with truth inside a stretch of >= 20 s in which
+  // fewer than 3 distinct anchors (vehicle ids excluded) were heard in the 2 s
+  // before each epoch (issue 16's "sees < 3 anchors for >= 20 s"; computed from
+  // the recording, never shown to the firmware).
+  size_t sparse_n = 0, sparse_in2s_xy = 0;  // in2s: x and y axes counted separately
+  double sparse_sq_sum = 0.0, sparse_max_m = 0.0;
   uint64_t ranges_used = 0, ranges_rejected = 0;
   Confusion nlos;               // decisions vs labels (labels never reach the firmware)
   double wall_s = 0.0;          // simulation + replay wall time [s]
@@ -80,6 +86,7 @@ struct CellSummary {
   double fallback_share = 0.0, fallback_rmse = 0.0;
   double inertial_rmse = 0.0;  // pooled horizontal RMSE of the epochs published by the IMU filter [m]
   double fused_share = 0.0;
+  double sparse_share = 0.0, sparse_rmse = 0.0, sparse_max = 0.0, sparse_in2s = 0.0;  // epochs with < 3 anchors heard
   double nlos_precision = 0.0, nlos_recall = 0.0;
 };
 CellSummary summarise_cell(const std::string& name, const std::vector<DriveMetrics>& drives);

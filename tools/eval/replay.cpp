@@ -95,8 +95,9 @@ uint64_t first_time_us(const ImuSample* imu, const dataset::UwbRow* uwb) {
 
 // The lockstep loop over any pair of sources starting at `t0_us`; `t_end_us`
 // (0: unknown) only scales the progress line.
-Status run_loop(const SiteConfig& site, hal::ImuSource& imu, hal::UwbSource& uwb, hal::GnssSource* gnss, uint64_t t0_us,
-                uint64_t t_end_us, const ReplayOptions& options, ReplayResult& result, std::string* error) {
+Status run_loop(const SiteConfig& site, hal::ImuSource& imu, hal::UwbSource& uwb, hal::GnssSource* gnss,
+                hal::NeighbourSource* neighbours, uint64_t t0_us, uint64_t t_end_us, const ReplayOptions& options,
+                ReplayResult& result, std::string* error) {
   const bool writing = !options.out_dir.empty();
   const bool async = writing || options.sink != nullptr;
   AsyncOutputWriter outputs;
@@ -110,7 +111,7 @@ Status run_loop(const SiteConfig& site, hal::ImuSource& imu, hal::UwbSource& uwb
   hal::CanBus& can = writing ? static_cast<hal::CanBus&>(logged_bus) : bus;
   hal::NullSerialPort serial;
   hal::EmptyParamStore store;
-  hal::Board board{imu, uwb, can, serial, clock, store, site, gnss};
+  hal::Board board{imu, uwb, can, serial, clock, store, site, gnss, neighbours};
 
   App app(board);
   if (!ok(app.init())) {
@@ -198,7 +199,8 @@ Status run_replay(const dataset::Recording& rec, const ReplayOptions& options, R
     result.estimates.reserve(n + 16);
     result.ranges.reserve(rec.uwb.size());
   }
-  return run_loop(rec.site, sources.imu, sources.uwb, sources.gnss_or_null(rec), t0, t_end, options, result, error);
+  return run_loop(rec.site, sources.imu, sources.uwb, sources.gnss_or_null(rec), sources.neighbours_or_null(rec), t0,
+                  t_end, options, result, error);
 }
 
 Status run_replay(dataset::RecordingStream& rec, const ReplayOptions& options, ReplayResult& result,
@@ -207,8 +209,10 @@ Status run_replay(dataset::RecordingStream& rec, const ReplayOptions& options, R
   StreamImuSource imu(rec.imu);
   StreamUwbSource uwb(rec.uwb);
   hal::ReplayGnssSource gnss(rec.gnss);  // gnss.csv is small (a few hertz): read whole
+  hal::ReplayNeighbourSource neighbours(rec.neighbours);  // neighbours.csv likewise
   const uint64_t t0 = first_time_us(rec.imu.peek(), rec.uwb.peek());
-  return run_loop(rec.site, imu, uwb, rec.gnss.empty() ? nullptr : &gnss, t0, 0, options, result, error);
+  return run_loop(rec.site, imu, uwb, rec.gnss.empty() ? nullptr : &gnss,
+                  rec.neighbours.empty() ? nullptr : &neighbours, t0, 0, options, result, error);
 }
 
 }  // namespace uwbnav::eval

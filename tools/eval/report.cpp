@@ -141,7 +141,8 @@ MethodResult run_imu_only(const dataset::Recording& rec) {
   hal::MemCanBus bus;
   hal::NullSerialPort serial;
   hal::EmptyParamStore store;
-  hal::Board board{sources.imu, uwb, bus, serial, clock, store, rec.site, sources.gnss_or_null(rec)};
+  hal::Board board{sources.imu, uwb, bus, serial, clock, store, rec.site, sources.gnss_or_null(rec),
+                   sources.neighbours_or_null(rec)};
   App app(board);
   if (!ok(app.init())) return m;
   std::vector<dataset::EstimateRow> est;

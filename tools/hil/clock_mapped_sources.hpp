@@ -1,5 +1,5 @@
-// Replay sources for a real-time host firmware: the recording's IMU, UWB and GNSS
-// streams (hal::ReplaySources) with sensor time mapped onto the board clock,
+// Replay sources for a real-time host firmware: the recording's IMU, UWB, GNSS and
+// neighbour-state streams (hal::ReplaySources) with sensor time mapped onto the board clock,
 // so samples become due when the wall clock reaches them (t_clock = map(t_rec)).
 #pragma once
 
@@ -42,6 +42,18 @@ class ClockMappedGnssSource final : public hal::GnssSource {
 
  private:
   hal::ReplayGnssSource& inner_;
+  TimeMap map_;
+};
+
+// Neighbour states: validity and arrival both mapped; due when the arrival's clock time is reached.
+class ClockMappedNeighbourSource final : public hal::NeighbourSource {
+ public:
+  ClockMappedNeighbourSource(hal::ReplayNeighbourSource& inner, const TimeMap& map) : inner_(inner), map_(map) {}
+  [[nodiscard]] Status poll(uint64_t up_to_us, NeighbourState& out) override;
+  bool finished() const override { return inner_.finished(); }
+
+ private:
+  hal::ReplayNeighbourSource& inner_;
   TimeMap map_;
 };
 

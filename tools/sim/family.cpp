@@ -1,6 +1,7 @@
 // Scenario family (see family.hpp): per cell the ranges every drive is drawn
 // from, a route planner for random ground drives (lots, roads, trolleys) and
-// multicopter flights, random anchor layouts, obstacles, error models and GNSS.
+// multicopter flights, random anchor layouts, obstacles, error models, GNSS and
+// neighbour vehicles (the cooperative street canyon).
 #include "tools/sim/family.hpp"
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include <cstdlib>
 
 #include "tools/sim/rng.hpp"
+#include "tools/sim/trajectory.hpp"
 
 namespace uwbnav::sim {
 namespace {
@@ -30,7 +32,8 @@ double draw_log(Rng& r, Span s) {
 int draw_int(Rng& r, int lo, int hi) { return hi > lo ? lo + static_cast<int>(r.below(static_cast<uint64_t>(hi - lo + 1))) : lo; }
 
 // kGnss: a long road with anchors at one end only, GNSS throughout (ground_gnss).
-enum class CellKind : uint8_t { kGround, kAir, kTrolley, kOutage, kGnss };
+// kCoop: a street canyon with anchors at one end, neighbour vehicles, GNSS at the open ends (coop_canyon).
+enum class CellKind : uint8_t { kGround, kAir, kTrolley, kOutage, kGnss, kCoop };
 
 // IMU grades as bits, in the order of imu_grade_names().
 constexpr unsigned kConsumer = 1U;
@@ -239,6 +242,21 @@ std::vector<CellSpec> make_specs() {
     c.body_block_prob = 0.5;
     c.outlier_prob = {0, 0.005};
     c.speed_mps = {10, 15};
+    c.road_prob = 1.0;
+    v.push_back(c);
+  }
+  {
+    CellSpec c;
+    c.name = "coop_canyon";
+    c.description = "250-350 m street canyon, 4-6 anchors over its first 40-55 m only (UWB range 45-65 m), out and back at 3-10 m/s; 2-3 neighbour vehicles (convoy, adjacent lane, oncoming) broadcasting honest states at 10 Hz, ranges to their tags (NLOS through a third vehicle); GNSS at the open ends, blocked or multipath inside";
+    c.kind = CellKind::kCoop;
+    c.duration_s = {60, 300};  // drawn, then replaced by the planned drive's length
+    c.anchors_max = 6;
+    c.rate_hz = {10, 30};
+    c.episode_share = {0, 0.1};
+    c.body_block_prob = 0.3;
+    c.outlier_prob = {0, 0.005};
+    c.speed_mps = {3, 10};
     c.road_prob = 1.0;
     v.push_back(c);
   }
@@ -589,11 +607,9 @@ void place_gnss_windows(Rng& r, GnssWindowKind kind, int n, Span len, double dur
             [](const GnssWindow& a, const GnssWindow& b) { return a.start_s < b.start_s; });
 }
 
-// ground_gnss: UWB coverage limit and a DGNSS-like receiver with drawn errors,
-// misreported sigmas, latency, lever arm, 1-3 blocked and 1-3 multipath windows.
-void draw_gnss(Rng& r, double duration_s, Scenario& s) {
-  s.uwb.max_range_m = std::round(r.uniform(60.0, 100.0));
-  GnssConfig& g = s.gnss;
+// A DGNSS-like receiver with drawn errors, misreported sigmas, latency and
+// lever arm (no windows).
+void draw_receiver(Rng& r, GnssConfig& g) {
   g.enabled = true;
   g.rate_hz = 5.0;
   g.latency_ms = std::round(r.uniform(50.0, 150.0));
@@ -612,6 +628,14 @@ void draw_gnss(Rng& r, double duration_s, Scenario& s) {
   g.multipath_turn_dps = r.uniform(2.0, 10.0);
   g.multipath_claim_factor = 2.0;
   g.windows.clear();
+}
+
+// ground_gnss: UWB coverage limit and a DGNSS-like receiver with drawn errors,
+// misreported sigmas, latency, lever arm, 1-3 blocked and 1-3 multipath windows.
+void draw_gnss(Rng& r, double duration_s, Scenario& s) {
+  s.uwb.max_range_m = std::round(r.uniform(60.0, 100.0));
+  GnssConfig& g = s.gnss;
+  draw_receiver(r, g);
   const int n_blocked = draw_int(r, 1, 3);
   const int n_multipath = draw_int(r, 1, 3);
   // One of each first, so that both kinds find room in a short drive.
@@ -619,6 +643,183 @@ void draw_gnss(Rng& r, double duration_s, Scenario& s) {
   place_gnss_windows(r, GnssWindowKind::kMultipath, 1, Span{5.0, 30.0}, duration_s, g.windows);
   place_gnss_windows(r, GnssWindowKind::kBlocked, n_blocked - 1, Span{5.0, 20.0}, duration_s, g.windows);
   place_gnss_windows(r, GnssWindowKind::kMultipath, n_multipath - 1, Span{5.0, 30.0}, duration_s, g.windows);
+}
+
+// coop_canyon: the street and what the planner decided (for GNSS windows and neighbours).
+struct Canyon {
+  Area street;                     // carriageway: x along the street from the anchors' end, y across [m]
+  double lane_w_m = 3.5;
+  double out_lane_y_m = 0.0;       // the ego's lane on the way out (+x); it comes back two lanes left
+  double oncoming_lane_y_m = 0.0;  // a lane nobody else uses, driven in -x
+  double canyon_x0_m = 0.0;        // GNSS blocked or multipath for x in [x0, x1]
+  double canyon_x1_m = 0.0;
+  double v_cruise_mps = 0.0;       // the ego's cruise speed
+};
+
+// Lateral displacement of a 180 deg turn with the smooth step at speed v over T
+// is v T times this: integral over u in [0, 1] of sin(pi S(u)), S(u) = u - sin(2 pi u) / (2 pi).
+double uturn_lateral_factor() {
+  constexpr int kSteps = 2000;
+  double sum = 0.0;
+  for (int i = 0; i < kSteps; ++i) {
+    const double u = (i + 0.5) / kSteps;
+    sum += std::sin(kPi * (u - std::sin(2.0 * kPi * u) / (2.0 * kPi)));
+  }
+  return sum / kSteps;
+}
+
+// Street canyon of 5 lanes, anchors over its first 40-55 m, the ego parked at
+// the anchors' end, then out at cruise speed, a U-turn (two lanes left) near
+// the far end, back and parked again among the anchors; the drive's length is
+// what the route takes plus 5-10 s.
+Canyon plan_canyon(Rng& r, const CellSpec& c, int n_anchors, const FamilyOptions& opt, Scenario& s) {
+  Canyon k;
+  const double length = r.uniform(250.0, 350.0);
+  k.street = Area{0.0, 0.0, length, 5.0 * k.lane_w_m};
+  k.out_lane_y_m = 1.5 * k.lane_w_m;
+  k.oncoming_lane_y_m = 4.5 * k.lane_w_m;
+  const Area zone{0.0, 0.0, r.uniform(40.0, 55.0), k.street.h()};
+  const double base_h = draw(r, c.anchor_height_m);
+  const double spread = draw(r, c.anchor_spread_m);
+  place_road_anchors(r, n_anchors, zone, r.uniform(0.5, 2.5), base_h, spread, s.anchors);
+  // A tag below the roof line (behind the windscreen), so other cars can shadow it.
+  s.tags.push_back(TagDef{0, {r.uniform(0.0, 1.0), r.uniform(-0.2, 0.2), r.uniform(1.1, 1.4)}});
+
+  constexpr double kALon = 1.5;  // mean longitudinal acceleration [m/s^2]
+  const double v = draw(r, c.speed_mps);
+  k.v_cruise_mps = v;
+  const double v_turn = std::min(v, r.uniform(2.0, 2.5));
+  GroundPlanner p;
+  p.x = r.uniform(3.0, 8.0);
+  p.y = k.out_lane_y_m;
+  s.route.start_nav_m[0] = p.x;
+  s.route.start_nav_m[1] = p.y;
+  s.route.start_nav_m[2] = 0.0;
+  s.route.start_heading_deg = 0.0;
+  p.push(ManeuverKind::kHold, 0.0, r.uniform(10.0, 14.0));
+  p.push(ManeuverKind::kSpeed, v, std::max(2.0, 1.5 * v / kALon));
+  const double t_brake = std::max(2.0, 1.5 * (v - v_turn) / kALon);
+  const double d_brake = v > v_turn + 0.1 ? 0.5 * (v + v_turn) * t_brake : 0.0;
+  const double x_turn = length - 10.0;
+  if (x_turn - d_brake - p.x > 1.0) p.push(ManeuverKind::kHold, 0.0, (x_turn - d_brake - p.x) / v);
+  if (v > v_turn + 0.1) p.push(ManeuverKind::kSpeed, v_turn, t_brake);
+  p.push(ManeuverKind::kTurn, 180.0, 2.0 * k.lane_w_m / (v_turn * uturn_lateral_factor()));
+  if (v > v_turn + 0.1) p.push(ManeuverKind::kSpeed, v, std::max(2.0, 1.5 * (v - v_turn) / kALon));
+  const double x_stop = r.uniform(15.0, 35.0);
+  const double t_stop = std::max(2.0, 1.5 * v / kALon);
+  const double d_stop = 0.5 * v * t_stop;
+  if (p.x - x_stop - d_stop > 1.0) p.push(ManeuverKind::kHold, 0.0, (p.x - x_stop - d_stop) / v);
+  p.push(ManeuverKind::kSpeed, 0.0, t_stop);
+  p.push(ManeuverKind::kHold, 0.0, 1.0);
+  s.route.maneuvers = p.out;
+  s.route.loop_from = s.route.maneuvers.size() - 1;  // parked to the end
+  double duration = std::round(p.t + r.uniform(5.0, 10.0));
+  if (opt.fast) duration = std::min(duration, 150.0);
+  s.duration_s = duration;
+  k.canyon_x0_m = r.uniform(60.0, 90.0);
+  k.canyon_x1_m = length - r.uniform(20.0, 40.0);
+  return k;
+}
+
+// coop_canyon: UWB coverage, the ego's receiver with windows wherever the ego
+// is inside the canyon (blocked or multipath, 5-20 s each), and 2-3 neighbour
+// vehicles: a convoy car 8-18 m ahead, a second one 7-12 m ahead of it (so it
+// is mostly ranged through the first) or 8-30 m behind, each up to 0.5 m off
+// the ego's line, and maybe a car in the lane to the right (-15..15 m ahead)
+// or an oncoming car in a lane of its own. The offset cars drive the ego's
+// route translated (a rigid formation); the oncoming one starts beyond the far
+// end after 0-40 s and drives through at 3-10 m/s.
+void draw_coop(Rng& r, const Canyon& k, Scenario& s) {
+  s.uwb.max_range_m = std::round(r.uniform(45.0, 65.0));
+  GnssConfig& g = s.gnss;
+  draw_receiver(r, g);
+  Trajectory ego;
+  ego.build(s, s.duration_s);
+  bool inside = false;
+  double t_in = 0.0;
+  for (double t = 0.0;; t += 0.1) {
+    const bool end = t >= s.duration_s - 1e-9;
+    const double x = end ? 0.0 : ego.at(static_cast<uint64_t>(std::llround(t * 1e6))).pos_nav_m.x();
+    const bool now_inside = !end && x >= k.canyon_x0_m && x <= k.canyon_x1_m;
+    if (now_inside && !inside) t_in = std::round(t * 10.0) / 10.0;
+    if (!now_inside && inside) {
+      const double t_out = std::round(t * 10.0) / 10.0;
+      for (double w0 = t_in; w0 < t_out;) {
+        double w1 = std::min(t_out, w0 + std::round(r.uniform(5.0, 20.0) * 10.0) / 10.0);
+        if (t_out - w1 < 0.5) w1 = t_out;  // no sliver of open sky inside the canyon
+        const GnssWindowKind kind = r.uniform() < 0.5 ? GnssWindowKind::kBlocked : GnssWindowKind::kMultipath;
+        g.windows.push_back(GnssWindow{kind, w0, w1});
+        w0 = w1;
+      }
+    }
+    inside = now_inside;
+    if (end) break;
+  }
+
+  CoopConfig& co = s.coop;
+  co.vehicles.clear();
+  const auto add = [&](NeighbourDef n) {
+    n.id = static_cast<uint16_t>(kFirstVehicleId + 1 + co.vehicles.size());
+    n.tag_lever_body_m[0] = r.uniform(-0.5, 1.0);
+    n.tag_lever_body_m[1] = r.uniform(-0.2, 0.2);
+    n.tag_lever_body_m[2] = r.uniform(1.1, 1.4);
+    n.sigma_m[0] = r.uniform(0.05, 0.2);
+    n.sigma_m[1] = r.uniform(0.05, 0.2);
+    n.sigma_m[2] = std::max(n.sigma_m[0], n.sigma_m[1]) * r.uniform(1.5, 2.5);
+    n.tau_s = r.uniform(5.0, 20.0);
+    co.vehicles.push_back(n);
+  };
+  const auto offset = [](double ahead_m, double left_m) {
+    NeighbourDef n;
+    n.motion = NeighbourMotion::kOffset;
+    n.offset_m[0] = ahead_m;
+    n.offset_m[1] = left_m;
+    return n;
+  };
+  const double gap_m = r.uniform(8.0, 18.0);
+  add(offset(gap_m, r.uniform(-0.5, 0.5)));
+  if (r.uniform() < 0.5) {
+    add(offset(gap_m + r.uniform(7.0, 12.0), r.uniform(-0.5, 0.5)));
+  } else {
+    add(offset(-r.uniform(8.0, 30.0), r.uniform(-0.5, 0.5)));
+  }
+  if (r.uniform() < 0.6) {
+    if (r.uniform() < 0.5) {
+      add(offset(r.uniform(-15.0, 15.0), -k.lane_w_m));
+    } else {
+      NeighbourDef n;
+      n.motion = NeighbourMotion::kRoute;
+      n.route.start_nav_m[0] = k.street.x1 + r.uniform(0.0, 30.0);
+      n.route.start_nav_m[1] = k.oncoming_lane_y_m;
+      n.route.start_heading_deg = 180.0;
+      const double v = r.uniform(3.0, 10.0);
+      Maneuver wait;
+      wait.kind = ManeuverKind::kHold;
+      wait.duration_s = std::round(r.uniform(0.1, 40.0) * 100.0) / 100.0;
+      Maneuver go;
+      go.kind = ManeuverKind::kSpeed;
+      go.value = v;
+      go.duration_s = std::max(2.0, std::round(v / 1.5 * 100.0) / 100.0);
+      Maneuver cruise;
+      cruise.kind = ManeuverKind::kHold;
+      cruise.duration_s = 1.0;
+      n.route.maneuvers = {wait, go, cruise};
+      add(n);
+    }
+  }
+  co.rate_hz = 10.0;
+  co.latency_ms = std::round(r.uniform(30.0, 70.0));
+  co.latency_jitter_ms = std::round(r.uniform(5.0, 10.0));
+  co.vel_sigma_mps = r.uniform(0.02, 0.08);
+  co.dependent = false;
+  co.range_rate_hz = 10.0;
+  co.range_offset_ms = r.uniform(1.0, 9.0);
+  co.box_m[0] = 4.5;
+  co.box_m[1] = 1.8;
+  co.box_m[2] = 1.5;
+  co.nlos_bias_min_m = 0.2;
+  co.nlos_bias_max_m = 1.5;
+  co.nlos_extra_sigma_m = r.uniform(0.1, 0.2);
 }
 
 void draw_scenario(const CellSpec& c, uint64_t seed, const FamilyOptions& opt, Scenario& s) {
@@ -635,7 +836,7 @@ void draw_scenario(const CellSpec& c, uint64_t seed, const FamilyOptions& opt, S
     road = u < 0.35;
   } else if (kind == CellKind::kGround) {
     road = r.uniform() < c.road_prob;
-  } else if (kind == CellKind::kGnss) {
+  } else if (kind == CellKind::kGnss || kind == CellKind::kCoop) {
     road = true;
   }
   const bool air = kind == CellKind::kAir;
@@ -653,6 +854,7 @@ void draw_scenario(const CellSpec& c, uint64_t seed, const FamilyOptions& opt, S
 
   // Site and route.
   Area area;
+  Canyon canyon;
   const int n_anchors = draw_int(r, c.anchors_min, c.anchors_max);
   if (air) {
     area = Area{0.0, 0.0, r.uniform(8.0, 15.0), r.uniform(6.0, 12.0)};
@@ -683,6 +885,10 @@ void draw_scenario(const CellSpec& c, uint64_t seed, const FamilyOptions& opt, S
     place_road_anchors(r, n_anchors, zone, r.uniform(1.0, 5.0), base_h, spread, s.anchors);
     s.tags.push_back(TagDef{0, {r.uniform(0.0, 1.0), 0.0, r.uniform(1.4, 2.0)}});
     plan_ground(r, area, v_cruise, duration, true, false, s.route);
+  } else if (kind == CellKind::kCoop) {
+    canyon = plan_canyon(r, c, n_anchors, opt, s);
+    area = canyon.street;
+    duration = s.duration_s;
   } else {
     area = road ? Area{0.0, 0.0, r.uniform(150.0, 300.0), r.uniform(15.0, 25.0)}
                 : Area{0.0, 0.0, r.uniform(30.0, 120.0), r.uniform(20.0, 60.0)};
@@ -764,6 +970,7 @@ void draw_scenario(const CellSpec& c, uint64_t seed, const FamilyOptions& opt, S
   nl.episode_bias_law = r.uniform() < 0.5 ? RandomLaw::kExponential : RandomLaw::kLogNormal;
 
   if (c.kind == CellKind::kGnss) draw_gnss(r, duration, s);
+  if (c.kind == CellKind::kCoop) draw_coop(r, canyon, s);
 
   s.description = std::string(c.name) + " seed " + std::to_string(seed) + ": " + (air ? "multicopter" : trolley ? "trolley" : road ? "road" : "lot") +
                   " " + fmt(area.w()) + "x" + fmt(area.h()) + " m, " + std::to_string(n_anchors) + " anchors, " +
@@ -779,6 +986,18 @@ void draw_scenario(const CellSpec& c, uint64_t seed, const FamilyOptions& opt, S
                      " m (claimed x" + fmt(s.gnss.claim_ratio) + "), latency " + fmt(s.gnss.latency_ms) + " ms, " +
                      std::to_string(blocked) + " blocked + " + std::to_string(s.gnss.windows.size() - blocked) +
                      " multipath windows";
+  }
+  if (!s.coop.vehicles.empty()) {
+    s.description += ", " + fmt(canyon.v_cruise_mps) + " m/s, " + std::to_string(s.coop.vehicles.size()) +
+                     " neighbours (";
+    for (size_t i = 0; i < s.coop.vehicles.size(); ++i) {
+      const NeighbourDef& n = s.coop.vehicles[i];
+      s.description += i > 0 ? ", " : "";
+      s.description += n.motion == NeighbourMotion::kRoute ? std::string("oncoming")
+                       : std::fabs(n.offset_m[1]) > 1.0   ? "next lane " + fmt(n.offset_m[0]) + " m"
+                                                          : fmt(n.offset_m[0]) + " m";
+    }
+    s.description += ")";
   }
   snap_to_recording_precision(s);
 }

@@ -118,6 +118,94 @@ bool parse_id(const std::string& w, unsigned long max, unsigned long& out, std::
   return true;
 }
 
+// One maneuver from words w[first..] ("KIND ARGS...").
+bool parse_maneuver(const std::vector<std::string>& w, size_t first, Maneuver& mv, std::string* why) {
+  size_t nargs = 0;
+  if (w.size() <= first) {
+    *why = "empty maneuver";
+    return false;
+  }
+  const std::string& kind = w[first];
+  if (kind == "hold") {
+    mv.kind = ManeuverKind::kHold;
+    nargs = 1;
+  } else if (kind == "speed") {
+    mv.kind = ManeuverKind::kSpeed;
+    nargs = 2;
+  } else if (kind == "turn") {
+    mv.kind = ManeuverKind::kTurn;
+    nargs = 2;
+  } else if (kind == "climb") {
+    mv.kind = ManeuverKind::kClimb;
+    nargs = 2;
+  } else if (kind == "goto") {
+    mv.kind = ManeuverKind::kGoto;
+    nargs = 4;
+  } else if (kind == "eight") {
+    mv.kind = ManeuverKind::kEight;
+    nargs = 5;
+  } else {
+    *why = "unknown maneuver '" + kind + "' (hold, speed, turn, climb, goto, eight)";
+    return false;
+  }
+  if (w.size() != first + nargs + 1) {
+    *why = "maneuver '" + kind + "' needs " + std::to_string(nargs) + " number(s)";
+    return false;
+  }
+  double x[5] = {0, 0, 0, 0, 0};
+  for (size_t i = 0; i < nargs; ++i) {
+    if (!parse_double(w[first + i + 1], x[i])) {
+      *why = "not a finite number: '" + w[first + i + 1] + "'";
+      return false;
+    }
+  }
+  mv.duration_s = x[nargs - 1];
+  mv.value = nargs == 2 ? x[0] : 0.0;
+  if (nargs > 2) {
+    for (size_t i = 0; i + 1 < nargs; ++i) mv.arg[i] = x[i];
+  }
+  if (mv.kind == ManeuverKind::kEight && (!(mv.arg[3] >= 1.0) || std::floor(mv.arg[3]) != mv.arg[3])) {
+    *why = "eight needs a whole number of loops >= 1";
+    return false;
+  }
+  if (!(mv.duration_s >= 0.1) || mv.duration_s > 1e6) {
+    *why = "maneuver duration must be in [0.1, 1e6] s";
+    return false;
+  }
+  if (mv.kind == ManeuverKind::kSpeed && (mv.value < 0.0 || mv.value > 100.0)) {
+    *why = "speed must be in [0, 100] m/s";
+    return false;
+  }
+  return true;
+}
+
+bool parse_vehicle_id(const std::string& w, uint16_t& out, std::string* why) {
+  unsigned long id = 0;
+  if (!parse_id(w, kNoVehicleId - 1U, id, why) || !is_vehicle_id(static_cast<uint16_t>(id))) {
+    *why = "vehicle id must be an integer in [" + std::to_string(kFirstVehicleId) + ", " +
+           std::to_string(kNoVehicleId - 1U) + "], got '" + w + "'";
+    return false;
+  }
+  out = static_cast<uint16_t>(id);
+  return true;
+}
+
+NeighbourDef* find_vehicle(Scenario& s, uint16_t id) {
+  for (NeighbourDef& n : s.coop.vehicles) {
+    if (n.id == id) return &n;
+  }
+  return nullptr;
+}
+
+// The vehicle a per-vehicle key names (it must have been defined by `vehicle` before).
+NeighbourDef* vehicle_for(Scenario& s, const std::string& w, std::string* why) {
+  uint16_t id = 0;
+  if (!parse_vehicle_id(w, id, why)) return nullptr;
+  NeighbourDef* n = find_vehicle(s, id);
+  if (n == nullptr) *why = "vehicle " + w + " not defined yet (coop.vehicle = ID ... first)";
+  return n;
+}
+
 const std::map<std::string, Setter>& setters() {
   static const std::map<std::string, Setter> table = [] {
     std::map<std::string, Setter> m;
@@ -455,66 +543,126 @@ const std::map<std::string, Setter>& setters() {
       return true;
     };
     m["route.maneuver"] = [](Scenario& s, const std::string& v, std::string* why) {
-      const std::vector<std::string> w = split_ws(v);
       Maneuver mv;
-      size_t nargs = 0;
-      if (w.empty()) {
-        *why = "empty maneuver";
-        return false;
-      }
-      if (w[0] == "hold") {
-        mv.kind = ManeuverKind::kHold;
-        nargs = 1;
-      } else if (w[0] == "speed") {
-        mv.kind = ManeuverKind::kSpeed;
-        nargs = 2;
-      } else if (w[0] == "turn") {
-        mv.kind = ManeuverKind::kTurn;
-        nargs = 2;
-      } else if (w[0] == "climb") {
-        mv.kind = ManeuverKind::kClimb;
-        nargs = 2;
-      } else if (w[0] == "goto") {
-        mv.kind = ManeuverKind::kGoto;
-        nargs = 4;
-      } else if (w[0] == "eight") {
-        mv.kind = ManeuverKind::kEight;
-        nargs = 5;
-      } else {
-        *why = "unknown maneuver '" + w[0] + "' (hold, speed, turn, climb, goto, eight)";
-        return false;
-      }
-      if (w.size() != nargs + 1) {
-        *why = "maneuver '" + w[0] + "' needs " + std::to_string(nargs) + " number(s)";
-        return false;
-      }
-      double x[5] = {0, 0, 0, 0, 0};
-      for (size_t i = 0; i < nargs; ++i) {
-        if (!parse_double(w[i + 1], x[i])) {
-          *why = "not a finite number: '" + w[i + 1] + "'";
-          return false;
-        }
-      }
-      mv.duration_s = x[nargs - 1];
-      mv.value = nargs == 2 ? x[0] : 0.0;
-      if (nargs > 2) {
-        for (size_t i = 0; i + 1 < nargs; ++i) mv.arg[i] = x[i];
-      }
-      if (mv.kind == ManeuverKind::kEight && (!(mv.arg[3] >= 1.0) || std::floor(mv.arg[3]) != mv.arg[3])) {
-        *why = "eight needs a whole number of loops >= 1";
-        return false;
-      }
-      if (!(mv.duration_s >= 0.1) || mv.duration_s > 1e6) {
-        *why = "maneuver duration must be in [0.1, 1e6] s";
-        return false;
-      }
-      if (mv.kind == ManeuverKind::kSpeed && (mv.value < 0.0 || mv.value > 100.0)) {
-        *why = "speed must be in [0, 100] m/s";
-        return false;
-      }
+      if (!parse_maneuver(split_ws(v), 0, mv, why)) return false;
       s.route.maneuvers.push_back(mv);
       return true;
     };
+    // [coop]
+    m["coop.vehicle"] = [](Scenario& s, const std::string& v, std::string* why) {
+      const std::vector<std::string> w = split_ws(v);
+      NeighbourDef n;
+      if (w.size() < 2 || !parse_vehicle_id(w[0], n.id, why)) {
+        if (w.size() < 2) *why = "vehicle needs 'ID offset DX DY' or 'ID route X Y Z HEADING'";
+        return false;
+      }
+      if (find_vehicle(s, n.id) != nullptr) {
+        *why = "duplicate vehicle id " + w[0];
+        return false;
+      }
+      double x[4] = {0, 0, 0, 0};
+      if (w[1] == "offset") {
+        if (w.size() != 4 || !parse_double(w[2], x[0]) || !parse_double(w[3], x[1])) {
+          *why = "vehicle needs 'ID offset DX DY' (metres ahead of and left of the ego's start)";
+          return false;
+        }
+        n.motion = NeighbourMotion::kOffset;
+        n.offset_m[0] = x[0];
+        n.offset_m[1] = x[1];
+      } else if (w[1] == "route") {
+        for (size_t i = 0; i < 4; ++i) {
+          if (w.size() != 6 || !parse_double(w[i + 2], x[i])) {
+            *why = "vehicle needs 'ID route X Y Z HEADING' (start pose; maneuvers from vehicle_maneuver)";
+            return false;
+          }
+        }
+        n.motion = NeighbourMotion::kRoute;
+        for (int i = 0; i < 3; ++i) n.route.start_nav_m[i] = x[i];
+        n.route.start_heading_deg = x[3];
+      } else {
+        *why = "unknown vehicle motion '" + w[1] + "' (offset, route)";
+        return false;
+      }
+      s.coop.vehicles.push_back(n);
+      return true;
+    };
+    m["coop.vehicle_maneuver"] = [](Scenario& s, const std::string& v, std::string* why) {
+      const std::vector<std::string> w = split_ws(v);
+      NeighbourDef* n = w.empty() ? nullptr : vehicle_for(s, w[0], why);
+      if (n == nullptr) {
+        if (w.empty()) *why = "vehicle_maneuver needs 'ID KIND ...'";
+        return false;
+      }
+      if (n->motion != NeighbourMotion::kRoute) {
+        *why = "vehicle " + w[0] + " follows the ego's route (offset): it takes no maneuvers";
+        return false;
+      }
+      Maneuver mv;
+      if (!parse_maneuver(w, 1, mv, why)) return false;
+      if (mv.kind == ManeuverKind::kGoto || mv.kind == ManeuverKind::kEight) {
+        *why = "a vehicle takes hold, speed, turn and climb maneuvers only";
+        return false;
+      }
+      n->route.maneuvers.push_back(mv);
+      return true;
+    };
+    m["coop.vehicle_tag"] = [](Scenario& s, const std::string& v, std::string* why) {
+      const std::vector<std::string> w = split_ws(v);
+      NeighbourDef* n = w.size() == 4 ? vehicle_for(s, w[0], why) : nullptr;
+      if (n == nullptr) {
+        if (w.size() != 4) *why = "vehicle_tag needs 'ID X Y Z' (lever arm, its body frame FLU)";
+        return false;
+      }
+      double x[3] = {0, 0, 0};
+      for (size_t i = 0; i < 3; ++i) {
+        if (!parse_double(w[i + 1], x[i]) || std::fabs(x[i]) > 100.0) {
+          *why = "vehicle tag lever arm must be numbers within [-100, 100] m";
+          return false;
+        }
+      }
+      for (int i = 0; i < 3; ++i) n->tag_lever_body_m[i] = x[i];
+      return true;
+    };
+    m["coop.vehicle_error"] = [](Scenario& s, const std::string& v, std::string* why) {
+      const std::vector<std::string> w = split_ws(v);
+      NeighbourDef* n = w.size() == 5 ? vehicle_for(s, w[0], why) : nullptr;
+      if (n == nullptr) {
+        if (w.size() != 5) *why = "vehicle_error needs 'ID ALONG_M CROSS_M UP_M TAU_S'";
+        return false;
+      }
+      double x[4] = {0, 0, 0, 0};
+      for (size_t i = 0; i < 4; ++i) {
+        if (!parse_double(w[i + 1], x[i]) || !(x[i] > 0.0) || x[i] > 1e5) {
+          *why = "vehicle_error sigmas and correlation time must be > 0";
+          return false;
+        }
+      }
+      for (int i = 0; i < 3; ++i) n->sigma_m[i] = x[i];
+      n->tau_s = x[3];
+      return true;
+    };
+    m["coop.rate_hz"] = real([](Scenario& s) -> double& { return s.coop.rate_hz; }, 0.1, 100);
+    m["coop.latency_ms"] = real([](Scenario& s) -> double& { return s.coop.latency_ms; }, 0, 10000);
+    m["coop.latency_jitter_ms"] = real([](Scenario& s) -> double& { return s.coop.latency_jitter_ms; }, 0, 10000);
+    m["coop.vel_sigma_mps"] = real([](Scenario& s) -> double& { return s.coop.vel_sigma_mps; }, 0, 100);
+    m["coop.dependent"] = flag([](Scenario& s) -> bool& { return s.coop.dependent; });
+    m["coop.range_rate_hz"] = real([](Scenario& s) -> double& { return s.coop.range_rate_hz; }, 0.1, 1000);
+    m["coop.range_offset_ms"] = real([](Scenario& s) -> double& { return s.coop.range_offset_ms; }, 0, 1000);
+    m["coop.box_m"] = [](Scenario& s, const std::string& v, std::string* why) {
+      double x[3] = {0, 0, 0};
+      if (!parse_numbers(v, 3, x, why)) return false;
+      for (int i = 0; i < 3; ++i) {
+        if (!(x[i] > 0.0) || x[i] > 100.0) {
+          *why = "box_m needs LENGTH WIDTH HEIGHT in (0, 100] m";
+          return false;
+        }
+        s.coop.box_m[i] = x[i];
+      }
+      return true;
+    };
+    m["coop.nlos_bias_min_m"] = real([](Scenario& s) -> double& { return s.coop.nlos_bias_min_m; }, 0, 100);
+    m["coop.nlos_bias_max_m"] = real([](Scenario& s) -> double& { return s.coop.nlos_bias_max_m; }, 0, 100);
+    m["coop.nlos_extra_sigma_m"] = real([](Scenario& s) -> double& { return s.coop.nlos_extra_sigma_m; }, 0, 100);
     return m;
   }();
   return table;
@@ -543,7 +691,8 @@ Status parse_into(const std::string& text, const std::string& origin, Scenario& 
       if (line.back() != ']' || line.size() < 3) return fail(error, where + "bad section header '" + line + "'");
       section = trim(line.substr(1, line.size() - 2));
       static const std::set<std::string> kSections = {"scenario", "site",    "imu",     "uwb",
-                                                      "nlos",     "channel", "vehicle", "route", "gnss"};
+                                                      "nlos",     "channel", "vehicle", "route", "gnss",
+                                                      "coop"};
       if (kSections.count(section) == 0) return fail(error, where + "unknown section [" + section + "]");
       continue;
     }
@@ -569,6 +718,42 @@ Status parse_into(const std::string& text, const std::string& origin, Scenario& 
     std::string why;
     if (!it->second(out, value, &why)) return fail(error, where + key + ": " + why);
   }
+  return Status::kOk;
+}
+
+// An integer number of microseconds per period of `rate_hz`.
+bool integer_period(double rate_hz) {
+  const double period_us = 1e6 / rate_hz;
+  return std::fabs(period_us - std::round(period_us)) <= 1e-6;
+}
+
+Status validate_coop(const Scenario& s, const std::set<uint16_t>& anchor_ids, std::string* error) {
+  const CoopConfig& c = s.coop;
+  if (c.vehicles.empty()) return Status::kOk;
+  if (c.vehicles.size() > kMaxSimVehicles) {
+    return fail(error, "coop: more than " + std::to_string(kMaxSimVehicles) + " vehicles");
+  }
+  for (const NeighbourDef& n : c.vehicles) {
+    const std::string id = std::to_string(n.id);
+    if (anchor_ids.count(n.id) != 0) return fail(error, "coop: vehicle id " + id + " is an anchor id");
+    if (n.motion == NeighbourMotion::kOffset && s.route.kind != RouteKind::kVehicle) {
+      return fail(error, "coop: vehicle " + id + " follows the ego's route (offset), which needs route.kind = vehicle");
+    }
+    if (n.motion == NeighbourMotion::kRoute && n.route.maneuvers.empty()) {
+      return fail(error, "coop: vehicle " + id + " has a route but no vehicle_maneuver");
+    }
+  }
+  if (!integer_period(c.rate_hz)) return fail(error, "coop.rate_hz must divide 1e6 us into an integer period");
+  if (!integer_period(c.range_rate_hz)) {
+    return fail(error, "coop.range_rate_hz must divide 1e6 us into an integer period");
+  }
+  if (c.range_offset_ms * 1e3 >= 1e6 / c.range_rate_hz) {
+    return fail(error, "coop.range_offset_ms must be shorter than the range period");
+  }
+  const double slots_per_s = c.range_rate_hz * static_cast<double>(c.vehicles.size() * s.tags.size());
+  if (slots_per_s > 10000.0) return fail(error, "coop: more than 10000 inter-vehicle range slots per second");
+  if (c.latency_jitter_ms > c.latency_ms) return fail(error, "coop.latency_jitter_ms exceeds coop.latency_ms");
+  if (c.nlos_bias_max_m < c.nlos_bias_min_m) return fail(error, "coop.nlos_bias_max_m < coop.nlos_bias_min_m");
   return Status::kOk;
 }
 
@@ -728,6 +913,8 @@ Status validate_scenario(const Scenario& s, std::string* error) {
       return fail(error, "gnss: sigma_h_m, sigma_v_m and sigma_white_m give a zero claimed sigma");
     }
   }
+  const Status coop = validate_coop(s, anchor_ids, error);
+  if (!ok(coop)) return coop;
   const bool copter = s.route.kind == RouteKind::kMulticopter;
   for (const Maneuver& mv : s.route.maneuvers) {
     const bool air_only = mv.kind == ManeuverKind::kGoto || mv.kind == ManeuverKind::kEight;

@@ -1,6 +1,6 @@
 // Scenario data model of the simulator and its INI-like text format
 // (docs/simulator.md): site, route, IMU errors, UWB ranging, NLOS geometry,
-// channel, GNSS receiver.
+// channel, GNSS receiver, neighbour vehicles (cooperative ranging).
 #pragma once
 
 #include <cstdint>
@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "estimator/status.hpp"
+#include "estimator/types.hpp"
 
 namespace uwbnav::sim {
 
@@ -228,6 +229,45 @@ struct RouteConfig {
   std::vector<Maneuver> yaw_turns;    // multicopter: heading changes on their own timeline (kTurn; 0 deg = hold)
 };
 
+// How a neighbour vehicle moves (docs/simulator.md "Cooperative ranging").
+enum class NeighbourMotion : uint8_t {
+  kOffset = 0,  // the ego's route translated by a fixed offset (convoy, adjacent lane)
+  kRoute = 1,   // a route of its own (start pose and maneuvers; repeats its last maneuver when exhausted)
+};
+
+// One neighbour vehicle: its motion, its ranging tag and the error of the state it broadcasts.
+struct NeighbourDef {
+  uint16_t id = kFirstVehicleId;             // vehicle id (uwb.csv anchor_id of the ranges to its tag)
+  NeighbourMotion motion = NeighbourMotion::kOffset;
+  double offset_m[2] = {0, 0};               // kOffset: ahead of and left of the ego's start pose [m]
+  RouteConfig route;                         // kRoute: start pose and maneuvers (vehicle kind)
+  double tag_lever_body_m[3] = {0, 0, 1.2};  // its ranging tag in its body frame (FLU) [m]
+  // Broadcast position error: per axis of its along-track / cross-track / up
+  // frame a stationary first-order Gauss-Markov error with these 1-sigmas,
+  // which the broadcast covariance claims (honestly).
+  double sigma_m[3] = {0.1, 0.1, 0.2};       // along, cross, up [m]
+  double tau_s = 10.0;                       // correlation time [s]
+};
+
+// Most neighbour vehicles a scenario may have.
+constexpr size_t kMaxSimVehicles = 16;
+
+// Neighbour vehicles: their broadcast states (neighbours.csv) and the ego's ranges to their tags.
+struct CoopConfig {
+  std::vector<NeighbourDef> vehicles;  // none: no neighbours.csv and no inter-vehicle ranges
+  double rate_hz = 10.0;               // broadcast states per second per vehicle; 1e6 / rate an integer [us]
+  double latency_ms = 50.0;            // mean delay from the time of validity to the arrival [ms]
+  double latency_jitter_ms = 20.0;     // per-state latency = mean + U[-jitter, +jitter] [ms]
+  double vel_sigma_mps = 0.05;         // white noise of the broadcast velocity per axis [m/s]
+  bool dependent = false;              // broadcast coop = 1 (the senders used neighbour ranges)
+  double range_rate_hz = 10.0;         // ranges per second per neighbour and ego tag; 1e6 / rate an integer [us]
+  double range_offset_ms = 5.0;        // time of the first inter-vehicle range slot [ms]
+  double box_m[3] = {4.5, 1.8, 1.5};   // vehicle body box: length, width (centred on the body origin), height [m]
+  double nlos_bias_min_m = 0.2;        // bias of a range blocked by a third vehicle ~ U[min, max] per blockage [m]
+  double nlos_bias_max_m = 1.5;        // [m]
+  double nlos_extra_sigma_m = 0.15;    // extra Gaussian noise of a blocked range [m]
+};
+
 struct SiteErrors {
   double survey_sigma_m = 0.0;  // anchors.csv = true position + N(0, sigma) per axis [m]
 };
@@ -248,6 +288,7 @@ struct Scenario {
   VehicleConfig vehicle;
   RouteConfig route;
   GnssConfig gnss;
+  CoopConfig coop;
 };
 
 // Names of the built-in presets; the first is the default scenario.

@@ -1,6 +1,7 @@
 // Simulator core: samples the truth trajectory, applies the MEMS IMU error
-// model (seed 000 Table 1), the UWB ranging/NLOS/channel models and the GNSS
-// receiver model, and fills a format v1 Recording.
+// model (seed 000 Table 1), the UWB ranging/NLOS/channel models, the GNSS
+// receiver model and the neighbour vehicles (broadcast states, inter-vehicle
+// ranges), and fills a format v1 Recording.
 #include "tools/sim/simulator.hpp"
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include <cstdlib>
 #include <utility>
 
+#include "tools/sim/coop.hpp"
 #include "tools/sim/rng.hpp"
 #include "tools/sim/trajectory.hpp"
 
@@ -31,6 +33,35 @@ constexpr uint64_t kStreamBurst = 0x42525354ULL;    // "BRST": Gilbert-Elliott s
 constexpr uint64_t kStreamBlock = 0x424C434BULL;    // "BLCK": anchor blockage schedule
 constexpr uint64_t kStreamSlot2 = 0x534C5432ULL;    // "SLT2": per-slot draws of the episode model
 constexpr uint64_t kStreamGnss = 0x474E5353ULL;     // "GNSS": receiver errors, latency, multipath windows
+constexpr uint64_t kStreamCoop = 0x434F4F50ULL;     // "COOP": neighbour broadcast errors and latencies per vehicle
+constexpr uint64_t kStreamCoopSlot = 0x43534C54ULL; // "CSLT": per inter-vehicle range slot
+constexpr uint64_t kStreamCoopBias = 0x43424953ULL; // "CBIS": bias of a range blocked by a third vehicle
+
+// One uwb.csv row (anchor or vehicle tag) with the DW1000-like channel
+// diagnostics when the scenario has them: log-distance path loss; blocked
+// paths lose nlos_extra_loss_db and show a larger total-minus-first-path gap
+// (folded normal).
+dataset::UwbRow range_row(uint64_t t_us, uint16_t id, uint8_t tag_id, double range_m, RangeCause cause,
+                          bool geometric_nlos, double true_range_m, bool diagnostics, const ChannelConfig& ch,
+                          double n_shadow, double n_gap) {
+  dataset::UwbRow row;
+  row.range.t_us = t_us;
+  row.range.anchor_id = id;
+  row.range.tag_id = tag_id;
+  row.range.range_m = static_cast<float>(range_m);
+  row.nlos_label = cause == RangeCause::kLos ? 0 : 1;
+  if (diagnostics) {
+    const bool weak_first_path = geometric_nlos || cause == RangeCause::kOutlier;
+    double rx = ch.rx_power_1m_dbm - 10.0 * ch.path_loss_exponent * std::log10(std::max(true_range_m, 0.3)) +
+                ch.shadowing_sigma_db * n_shadow;
+    if (geometric_nlos) rx -= ch.nlos_extra_loss_db;
+    const double gap = weak_first_path ? std::fabs(ch.nlos_gap_mean_db + ch.nlos_gap_sigma_db * n_gap)
+                                       : std::fabs(ch.los_gap_mean_db + ch.los_gap_sigma_db * n_gap);
+    row.range.rx_power_dbm = static_cast<float>(rx);
+    row.range.fp_power_dbm = static_cast<float>(rx - gap);
+  }
+  return row;
+}
 
 std::string fmt(double v) {
   char buf[64];
@@ -112,6 +143,30 @@ void fill_meta(const Scenario& sc, const SimOptions& opt, dataset::Recording& re
     rec.meta["sim_gnss_windows_s"] = list;
   }
   if (g.multipath_bias_m > 0.0) rec.meta["sim_gnss_multipath_bias_m"] = fmt(g.multipath_bias_m);
+}
+
+// Simulator facts of the neighbour vehicles (evaluation only).
+void fill_meta_coop(const Scenario& sc, dataset::Recording& rec) {
+  const CoopConfig& c = sc.coop;
+  if (c.vehicles.empty()) return;
+  std::string ids;
+  for (const NeighbourDef& n : c.vehicles) {
+    ids += (ids.empty() ? "" : ",") + std::to_string(n.id);
+    std::string v = n.motion == NeighbourMotion::kOffset
+                        ? "offset " + fmt(n.offset_m[0]) + " " + fmt(n.offset_m[1])
+                        : "route " + fmt(n.route.start_nav_m[0]) + " " + fmt(n.route.start_nav_m[1]) + " " +
+                              fmt(n.route.start_nav_m[2]) + " " + fmt(n.route.start_heading_deg);
+    v += ", tag " + fmt(n.tag_lever_body_m[0]) + " " + fmt(n.tag_lever_body_m[1]) + " " + fmt(n.tag_lever_body_m[2]);
+    v += ", sigma " + fmt(n.sigma_m[0]) + " " + fmt(n.sigma_m[1]) + " " + fmt(n.sigma_m[2]) + ", tau " + fmt(n.tau_s);
+    rec.meta["sim_coop_vehicle_" + std::to_string(n.id)] = v;
+  }
+  rec.meta["sim_coop_vehicles"] = ids;
+  rec.meta["sim_coop_rate_hz"] = fmt(c.rate_hz);
+  rec.meta["sim_coop_latency_ms"] = fmt(c.latency_ms);
+  rec.meta["sim_coop_latency_jitter_ms"] = fmt(c.latency_jitter_ms);
+  rec.meta["sim_coop_range_rate_hz"] = fmt(c.range_rate_hz);
+  rec.meta["sim_coop_box_m"] = fmt(c.box_m[0]) + " " + fmt(c.box_m[1]) + " " + fmt(c.box_m[2]);
+  rec.meta["sim_coop_nlos_bias_m"] = fmt(c.nlos_bias_min_m) + " " + fmt(c.nlos_bias_max_m);
 }
 
 // Simulator facts of the new error models (evaluation only; the firmware never reads meta.ini).
@@ -635,25 +690,8 @@ void simulate_uwb(const Scenario& sc, const SimOptions& opt, const Trajectory& t
     const double systematic = pe.offset_m + pe.scale * true_range;
     const double range = quantise(std::max(0.0, true_range + systematic + sigma * n_range + bias), lsb);
 
-    dataset::UwbRow row;
-    row.range.t_us = t_us;
-    row.range.anchor_id = anchor.id;
-    row.range.tag_id = tag.id;
-    row.range.range_m = static_cast<float>(range);
-    row.nlos_label = cause == RangeCause::kLos ? 0 : 1;
-    if (sc.uwb.channel_diagnostics) {
-      // Log-distance path loss; blocked paths lose nlos_extra_loss_db and show a
-      // larger total-minus-first-path gap (DW1000 diagnostics, folded normal).
-      const bool weak_first_path = geometric_nlos || cause == RangeCause::kOutlier;
-      double rx = ch.rx_power_1m_dbm - 10.0 * ch.path_loss_exponent * std::log10(std::max(true_range, 0.3)) +
-                  ch.shadowing_sigma_db * n_shadow;
-      if (geometric_nlos) rx -= ch.nlos_extra_loss_db;
-      const double gap = weak_first_path ? std::fabs(ch.nlos_gap_mean_db + ch.nlos_gap_sigma_db * n_gap)
-                                         : std::fabs(ch.los_gap_mean_db + ch.los_gap_sigma_db * n_gap);
-      row.range.rx_power_dbm = static_cast<float>(rx);
-      row.range.fp_power_dbm = static_cast<float>(rx - gap);
-    }
-    out.rec.uwb.push_back(row);
+    out.rec.uwb.push_back(range_row(t_us, anchor.id, tag.id, range, cause, geometric_nlos, true_range,
+                                    sc.uwb.channel_diagnostics, ch, n_shadow, n_gap));
     out.range_truth.push_back(RangeTruth{true_range, bias, systematic, cause});
   });
 }
@@ -783,6 +821,199 @@ void simulate_gnss(const Scenario& sc, const SimOptions& opt, const Trajectory& 
   }
 }
 
+// Broadcast states of the neighbour vehicles at coop.rate_hz (a random phase
+// per vehicle): the tag truth plus, per axis of the vehicle's along-track /
+// cross-track / up frame, a stationary first-order Gauss-Markov error whose
+// 1-sigmas the broadcast covariance claims (rotated into the navigation frame
+// by the vehicle's heading), so the claim is honest; the velocity is the tag's
+// true velocity plus white noise; latency mean +- jitter. Own random streams
+// per vehicle (errors, latencies).
+void simulate_neighbour_states(const Scenario& sc, const SimOptions& opt, const NeighbourTracks& tracks,
+                               uint64_t dur_us, SimOutput& out) {
+  const CoopConfig& c = sc.coop;
+  const uint64_t period_us = static_cast<uint64_t>(std::llround(1e6 / c.rate_hz));
+  struct Made {
+    NeighbourState state;
+    NeighbourTruth truth;
+  };
+  std::vector<Made> made;
+  for (size_t i = 0; i < tracks.size(); ++i) {
+    const NeighbourDef& n = tracks.vehicle(i);
+    Rng err(mix_seed(opt.seed, kStreamCoop, 1000 + i));
+    Rng lat(mix_seed(opt.seed, kStreamCoop, 2000 + i));
+    const uint64_t phase_us =
+        std::min(period_us - 1, static_cast<uint64_t>(lat.uniform() * static_cast<double>(period_us)));
+    const double phi = std::exp(-static_cast<double>(period_us) * 1e-6 / n.tau_s);
+    const double drive = std::sqrt(1.0 - phi * phi);
+    double e[3];
+    for (int k = 0; k < 3; ++k) e[k] = n.sigma_m[k] * err.normal();  // stationary from the start
+    const Eigen::Vector3d lever(n.tag_lever_body_m[0], n.tag_lever_body_m[1], n.tag_lever_body_m[2]);
+    for (uint64_t k = 0;; ++k) {
+      const uint64_t t_us = phase_us + k * period_us;
+      if (t_us >= dur_us) break;
+      if (k > 0) {
+        for (int a = 0; a < 3; ++a) e[a] = phi * e[a] + n.sigma_m[a] * drive * err.normal();
+      }
+      double n_vel[3];
+      for (double& v : n_vel) v = err.normal();
+      const double u_latency = lat.uniform();
+      const double latency_ms = std::max(0.0, c.latency_ms + c.latency_jitter_ms * (2.0 * u_latency - 1.0));
+      Made m;
+      m.state.t_us = t_us;
+      m.state.rx_t_us = t_us + static_cast<uint64_t>(std::llround(latency_ms * 1e3));
+      if (m.state.rx_t_us >= dur_us) continue;  // arrives after the end of the recording
+
+      const KinState st = tracks.at(i, t_us);
+      const Eigen::Vector3d tag = st.pos_nav_m + st.R_nav_body * lever;
+      const Eigen::Vector3d tag_vel = st.vel_nav_mps + st.R_nav_body * st.gyro_body_radps.cross(lever);
+      const double cy = std::cos(st.yaw_rad);
+      const double sy = std::sin(st.yaw_rad);
+      const Eigen::Vector3d error(cy * e[0] - sy * e[1], sy * e[0] + cy * e[1], e[2]);
+      const double va = n.sigma_m[0] * n.sigma_m[0];
+      const double vc = n.sigma_m[1] * n.sigma_m[1];
+      const double cov[6] = {cy * cy * va + sy * sy * vc, cy * sy * (va - vc) + 0.0, 0.0,  // + 0.0: no -0
+                             sy * sy * va + cy * cy * vc, 0.0, n.sigma_m[2] * n.sigma_m[2]};
+      const Eigen::Vector3d pos = tag + error;
+      const Eigen::Vector3d vel = tag_vel + c.vel_sigma_mps * Eigen::Vector3d(n_vel[0], n_vel[1], n_vel[2]);
+      m.state.vehicle_id = n.id;
+      m.state.pos_nav_m = Vec3f{static_cast<float>(pos.x()), static_cast<float>(pos.y()), static_cast<float>(pos.z())};
+      for (int a = 0; a < 6; ++a) m.state.cov_pos_m2[a] = static_cast<float>(cov[a]);
+      m.state.vel_nav_mps =
+          Vec3f{static_cast<float>(vel.x()), static_cast<float>(vel.y()), static_cast<float>(vel.z())};
+      m.state.cooperative = c.dependent;
+      for (int a = 0; a < 3; ++a) {
+        m.truth.tag_nav_m[a] = tag[a];
+        m.truth.tag_vel_nav_mps[a] = tag_vel[a];
+        m.truth.error_nav_m[a] = error[a];
+      }
+      made.push_back(m);
+    }
+  }
+  // neighbours.csv order (time of validity), then arrival order: what reading the file back gives.
+  std::stable_sort(made.begin(), made.end(), [](const Made& a, const Made& b) { return a.state.t_us < b.state.t_us; });
+  std::stable_sort(made.begin(), made.end(),
+                   [](const Made& a, const Made& b) { return a.state.rx_t_us < b.state.rx_t_us; });
+  out.rec.neighbours.reserve(made.size());
+  out.neighbour_truth.reserve(made.size());
+  for (const Made& m : made) {
+    out.rec.neighbours.push_back(m.state);
+    out.neighbour_truth.push_back(m.truth);
+  }
+}
+
+// Ranges from every ego tag to every neighbour's tag, coop.range_rate_hz per
+// pair, slots spread evenly over the period (vehicle-major), merged into the
+// anchor ranges by time. The anchors' LOS noise, packet loss, outliers,
+// coverage, outages, quantisation and channel diagnostics apply; a range whose
+// straight line crosses a third vehicle's body box is NLOS: a bias U[min, max]
+// drawn when the blockage starts, plus Gaussian extra noise, label 1. Every
+// slot draws the same numbers from its own stream, used or not.
+void simulate_vehicle_ranges(const Scenario& sc, const SimOptions& opt, const Trajectory& traj,
+                             const NeighbourTracks& tracks, uint64_t dur_us, SimOutput& out) {
+  const CoopConfig& c = sc.coop;
+  const NlosConfig& nl = sc.nlos;
+  const ChannelConfig& ch = sc.channel;
+  const bool noisy = !opt.ideal_uwb;
+  const double packet_loss = noisy ? sc.uwb.packet_loss : 0.0;
+  const double sigma = noisy ? sc.uwb.sigma_m : 0.0;
+  const double outlier_prob = noisy ? nl.outlier_prob : 0.0;
+  const double lsb = noisy ? sc.uwb.range_lsb_m : 0.0;
+  const double ln_out_min = std::log(nl.outlier_min_m);
+  const double ln_out_max = std::log(nl.outlier_max_m);
+  const size_t n_vehicles = tracks.size();
+  const size_t n_tags = sc.tags.size();
+  const size_t n_pairs = n_vehicles * n_tags;
+  const uint64_t period_us = static_cast<uint64_t>(std::llround(1e6 / c.range_rate_hz));
+  const uint64_t offset_us = static_cast<uint64_t>(std::llround(c.range_offset_ms * 1e3));
+  const uint64_t step_us = period_us / n_pairs;
+
+  std::vector<dataset::UwbRow> rows;
+  std::vector<RangeTruth> truths;
+  std::vector<Episode> episodes(n_pairs);
+  std::vector<KinState> bodies(n_vehicles);
+  for (uint64_t k = 0;; ++k) {
+    const uint64_t slot_t0 = offset_us + k * period_us;
+    if (slot_t0 >= dur_us) break;
+    for (size_t pair = 0; pair < n_pairs; ++pair) {
+      const uint64_t t_us = slot_t0 + pair * step_us;
+      if (t_us >= dur_us) break;
+      const size_t i = pair / n_tags;
+      const TagDef& tag = sc.tags[pair % n_tags];
+      const uint64_t slot_id = k * n_pairs + pair;
+      Rng r(mix_seed(opt.seed, kStreamCoopSlot, slot_id));
+      const double u_loss = r.uniform();
+      const double n_range = r.normal();
+      const double u_outlier = r.uniform();
+      const double u_out_mag = r.uniform();
+      const double u_out_sign = r.uniform();
+      const double n_extra = r.normal();
+      const double n_shadow = r.normal();
+      const double n_gap = r.normal();
+
+      const KinState ego = traj.at(t_us);
+      for (size_t m = 0; m < n_vehicles; ++m) bodies[m] = tracks.at(m, t_us);
+      const Eigen::Vector3d ego_lever(tag.lever_body_m[0], tag.lever_body_m[1], tag.lever_body_m[2]);
+      const Eigen::Vector3d ego_tag = ego.pos_nav_m + ego.R_nav_body * ego_lever;
+      const double* l = tracks.vehicle(i).tag_lever_body_m;
+      const Eigen::Vector3d other_tag = bodies[i].pos_nav_m + bodies[i].R_nav_body * Eigen::Vector3d(l[0], l[1], l[2]);
+      const double true_range = (other_tag - ego_tag).norm();
+      bool blocked = false;
+      for (size_t m = 0; m < n_vehicles && !blocked; ++m) {
+        blocked = m != i && segment_hits_vehicle(ego_tag, other_tag, bodies[m], c.box_m);
+      }
+      Episode& ep = episodes[pair];
+      if (blocked && !ep.blocked) {
+        Rng rb(mix_seed(opt.seed, kStreamCoopBias, slot_id));
+        ep.bias_m = rb.uniform(c.nlos_bias_min_m, c.nlos_bias_max_m);
+      }
+      ep.blocked = blocked;
+
+      if (in_outage(sc, t_us) || u_loss < packet_loss) continue;
+      if (sc.uwb.max_range_m > 0.0 && true_range > sc.uwb.max_range_m) continue;  // out of coverage
+
+      double bias = 0.0;
+      RangeCause cause = RangeCause::kLos;
+      if (noisy && blocked) {
+        bias += ep.bias_m + c.nlos_extra_sigma_m * n_extra;
+        cause = RangeCause::kVehicle;
+      }
+      const bool geometric_nlos = cause != RangeCause::kLos;
+      if (u_outlier < outlier_prob) {
+        double mag = std::exp(ln_out_min + u_out_mag * (ln_out_max - ln_out_min));
+        if (u_out_sign >= nl.outlier_positive_prob) mag = -std::min(mag, 0.5 * true_range);
+        bias += mag;
+        cause = RangeCause::kOutlier;
+      }
+      const double range = quantise(std::max(0.0, true_range + sigma * n_range + bias), lsb);
+
+      rows.push_back(range_row(t_us, tracks.vehicle(i).id, tag.id, range, cause, geometric_nlos, true_range,
+                               sc.uwb.channel_diagnostics, ch, n_shadow, n_gap));
+      truths.push_back(RangeTruth{true_range, bias, 0.0, cause});
+    }
+  }
+
+  // Merge by time (anchor ranges first on ties), keeping range_truth parallel.
+  std::vector<dataset::UwbRow> merged_rows;
+  std::vector<RangeTruth> merged_truths;
+  merged_rows.reserve(out.rec.uwb.size() + rows.size());
+  merged_truths.reserve(merged_rows.capacity());
+  size_t a = 0;
+  size_t b = 0;
+  while (a < out.rec.uwb.size() || b < rows.size()) {
+    if (b >= rows.size() || (a < out.rec.uwb.size() && out.rec.uwb[a].range.t_us <= rows[b].range.t_us)) {
+      merged_rows.push_back(out.rec.uwb[a]);
+      merged_truths.push_back(out.range_truth[a]);
+      ++a;
+    } else {
+      merged_rows.push_back(rows[b]);
+      merged_truths.push_back(truths[b]);
+      ++b;
+    }
+  }
+  out.rec.uwb = std::move(merged_rows);
+  out.range_truth = std::move(merged_truths);
+}
+
 // Seed 000 §2.1: per (tag, anchor), a random `protocol_fraction` of the ranges
 // gets an added error of mean U[min, max] plus Gaussian spread, labelled NLOS.
 void apply_protocol(const Scenario& sc, const SimOptions& opt, SimOutput& out) {
@@ -830,6 +1061,7 @@ Status simulate_scenario(const Scenario& scenario, const SimOptions& options, Si
   out.blockages = draw_blockages(scenario, options);
   fill_meta(scenario, options, out.rec);
   fill_meta_errors(scenario, options, out, out.rec);
+  fill_meta_coop(scenario, out.rec);
 
   const uint64_t dur_us = static_cast<uint64_t>(std::llround(scenario.duration_s * 1e6));
   Trajectory traj;
@@ -838,6 +1070,12 @@ Status simulate_scenario(const Scenario& scenario, const SimOptions& options, Si
   simulate_uwb(scenario, options, traj, dur_us, out);
   if (scenario.nlos.protocol && !options.ideal_uwb) apply_protocol(scenario, options, out);
   simulate_gnss(scenario, options, traj, dur_us, out);
+  if (!scenario.coop.vehicles.empty()) {
+    NeighbourTracks tracks;
+    tracks.build(scenario, scenario.duration_s);
+    simulate_neighbour_states(scenario, options, tracks, dur_us, out);
+    simulate_vehicle_ranges(scenario, options, traj, tracks, dur_us, out);
+  }
   return Status::kOk;
 }
 

@@ -1,5 +1,6 @@
 // Deterministic UWB/IMU/GNSS scenario simulator: produces a format v1 Recording
-// (truth, IMU, ranges with NLOS labels, GNSS fixes) from a scenario preset or file.
+// (truth, IMU, ranges with NLOS labels, GNSS fixes, neighbour vehicles' states and
+// the ranges to their tags) from a scenario preset or file.
 #pragma once
 
 #include <cstdint>
@@ -37,11 +38,12 @@ enum class RangeCause : uint8_t {
   kOutlier = 3,   // gross outlier (possibly on top of a blocked path)
   kProtocol = 4,  // seed 000 §2.1 protocol: added error, labelled NLOS
   kEpisode = 5,   // random NLOS episode (renewal process, not geometry)
+  kVehicle = 6,   // range to a neighbour vehicle's tag blocked by a third vehicle's body box
 };
 
 // Per-range ground truth, parallel to Recording::uwb.
 struct RangeTruth {
-  double true_range_m = 0.0;  // tag antenna (truth pos + R lever) to anchor [m]
+  double true_range_m = 0.0;  // tag antenna (truth pos + R lever) to anchor or neighbour vehicle's tag [m]
   double bias_m = 0.0;        // NLOS / outlier / protocol error added on top of the LOS noise [m]
   double offset_m = 0.0;      // systematic part: anchor + tag + pair offset + scale error * true range [m]
   RangeCause cause = RangeCause::kLos;
@@ -81,6 +83,13 @@ struct GnssTruth {
   bool multipath = false;                      // inside a multipath window
 };
 
+// Per-state ground truth, parallel to Recording::neighbours (evaluation only).
+struct NeighbourTruth {
+  double tag_nav_m[3] = {0, 0, 0};        // the vehicle's true tag antenna at t_us [m]
+  double tag_vel_nav_mps[3] = {0, 0, 0};  // its true velocity (v + R (w x lever)) [m/s]
+  double error_nav_m[3] = {0, 0, 0};      // broadcast position minus truth before rounding to float [m]
+};
+
 struct SimOutput {
   dataset::Recording rec;
   std::vector<TruthState> truth;         // same instants as rec.truth / rec.imu
@@ -90,6 +99,7 @@ struct SimOutput {
   std::vector<PairError> pair_errors;    // per (tag, anchor), tag-major
   std::vector<Blockage> blockages;       // anchor blockage schedule
   std::vector<GnssTruth> gnss_truth;     // same order as rec.gnss
+  std::vector<NeighbourTruth> neighbour_truth;  // same order as rec.neighbours
 };
 
 // Simulates a parsed scenario.
