@@ -337,7 +337,11 @@ TEST(SimFamily, ExistingCellsDrawTheSameDrivesAsBefore) {
     EXPECT_EQ(got.uwb, w.uwb) << w.cell;
     EXPECT_EQ(got.nlos, w.nlos) << w.cell;
     EXPECT_EQ(got.gnss, w.gnss) << w.cell;
-    EXPECT_NEAR(static_cast<double>(got.range_sum_mm), static_cast<double>(w.range_sum_mm), 2.0) << w.cell;
+    // Builds at other optimisation levels (host-asan: -O2) flip a few
+    // millimetre roundings (seen: up to 20 mm on trolley3's 142k ranges); a
+    // shifted random stream would move the sum by sigma * sqrt(2 N), metres.
+    const double tol_mm = 2.0 + 0.5 * std::sqrt(static_cast<double>(w.uwb));
+    EXPECT_NEAR(static_cast<double>(got.range_sum_mm), static_cast<double>(w.range_sum_mm), tol_mm) << w.cell;
   }
 }
 
