@@ -305,6 +305,12 @@ DriveFingerprint fingerprint(const std::string& cell, const SimOutput& out) {
 // then (fast drives of seed 1): adding a cell, a scenario section or a random
 // stream must never change them.
 TEST(SimFamily, ExistingCellsDrawTheSameDrivesAsBefore) {
+#if !defined(__x86_64__)
+  // The fingerprints were taken on x86-64. Other targets (aarch64: GCC contracts
+  // a*b+c into FMA by default, another libm) draw slightly different floats, and
+  // a draw compared against a threshold can then take the other branch.
+  GTEST_SKIP() << "fingerprints recorded on x86-64";
+#endif
   const DriveFingerprint want[] = {
       {"ground_los", "ground_los seed 1: road 295x22.9 m, 4 anchors, 29.3 Hz per anchor, sigma 0.0966 m, NLOS episodes 0 %, 0 boxes, IMU 132 ug/rtHz, 0 outages",
         6000, 6860, 0, 0, 837169974},
