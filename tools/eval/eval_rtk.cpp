@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <string>
 
 #include "tools/cli/args.hpp"
 #include "tools/eval/eval_family.hpp"
@@ -156,11 +157,22 @@ void print_rtk_table(std::FILE* f, const std::vector<RtkSummary>& rows, bool mar
                  "| TTFF median [s] | TTFF max [s] | never fixed | re-fix after canyon, median [s] | never re-fixed "
                  "| correct-fix RMSE [m] | float RMSE [m] |\n");
     std::fprintf(f, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    // A figure that does not exist (no canyon, nothing fixed) prints as "–".
+    auto cell = [](double v, int decimals, const char* unit) {
+      char buf[32];
+      if (std::isnan(v)) return std::string("–");
+      std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+      return std::string(buf) + unit;
+    };
     for (const RtkSummary& r : rows) {
-      std::fprintf(f, "| %s | %d | %.1f %% | %.2f %% | %.1f %% | %.2f %% | %.1f | %.1f | %d | %.1f | %d | %.4f | %.3f |\n",
-                   r.name.c_str(), r.runs, 100.0 * r.open_fix_rate, 100.0 * r.open_wrong_rate,
-                   100.0 * r.canyon_fix_rate, 100.0 * r.canyon_wrong_rate, r.ttff_median_s, r.ttff_max_s,
-                   r.never_fixed, r.refix_median_s, r.never_refixed, r.correct_rmse_m, r.float_rmse_m);
+      std::fprintf(f, "| %s | %d | %s | %s | %s | %s | %s | %s | %d | %s | %s | %s | %s |\n", r.name.c_str(), r.runs,
+                   cell(100.0 * r.open_fix_rate, 1, " %").c_str(),
+                   cell(100.0 * r.open_wrong_rate, 2, " %").c_str(),
+                   cell(100.0 * r.canyon_fix_rate, 1, " %").c_str(),
+                   cell(100.0 * r.canyon_wrong_rate, 2, " %").c_str(), cell(r.ttff_median_s, 1, "").c_str(),
+                   cell(r.ttff_max_s, 1, "").c_str(), r.never_fixed, cell(r.refix_median_s, 1, "").c_str(),
+                   std::isnan(r.refix_median_s) ? "–" : std::to_string(r.never_refixed).c_str(),
+                   cell(r.correct_rmse_m, 4, "").c_str(), cell(r.float_rmse_m, 3, "").c_str());
     }
     return;
   }
