@@ -43,7 +43,7 @@ Status App::init() {
   can_tx_.configure(params_);
   can_decoder_.configure(params_);
   hil_rx_enabled_ = params_[ParamId::kCanHilRxEnable] > 0.5F;
-#if UWBNAV_COOP
+#if UWBNAV_COOP || UWBNAV_GNSS
   can_decoder_.set_hil_enabled(hil_rx_enabled_);
 #endif
   const Status s = nav_.configure(board_.site, params_);
@@ -64,7 +64,7 @@ void App::apply_params(const Params& params) {
   can_tx_.configure(params_);
   can_decoder_.configure(params_);
   hil_rx_enabled_ = params_[ParamId::kCanHilRxEnable] > 0.5F;
-#if UWBNAV_COOP
+#if UWBNAV_COOP || UWBNAV_GNSS
   can_decoder_.set_hil_enabled(hil_rx_enabled_);
 #endif
 }
@@ -179,9 +179,10 @@ void App::drain_sensors(uint64_t now_us) {
     if (!ok(s)) break;
     ignore_result(accept_uwb(r, now_us, stats_.uwb));
   }
-#if UWBNAV_COOP
-  // Neighbour states arrive on the vehicle bus (V2X_Neighbour*) with or without
-  // a HIL rig; the decoder drops the HIL sensor groups when HIL is off.
+#if UWBNAV_COOP || UWBNAV_GNSS
+  // Neighbour states (V2X_Neighbour*) and GNSS fixes (GNSS_Fix*) arrive on the
+  // vehicle bus with or without a HIL rig; the decoder drops the HIL sensor
+  // groups when HIL is off.
   drain_can_sensors(now_us);
 #else
   if (hil_rx_enabled_) drain_can_sensors(now_us);
@@ -220,6 +221,18 @@ void App::drain_can_sensors(uint64_t now_us) {
     if (sample.kind == can::SensorKind::kNeighbour) {
       // A neighbour state carries its own latency; the validator judges it.
       accept_neighbour(sample.neighbour, now_us);
+      continue;
+    }
+#endif
+#if UWBNAV_GNSS
+    if (sample.kind == can::SensorKind::kGnss) {
+      // Fused after the cycle's IMU and ranges, with the board's fixes (drain_gnss).
+      if (can_gnss_count_ < kMaxGnssPerCycle) {
+        can_gnss_[can_gnss_count_++] = sample.gnss;
+      } else {
+        ++stats_.gnss.received;
+        ++stats_.gnss.io_errors;  // more fixes in one cycle than kMaxGnssPerCycle: dropped
+      }
       continue;
     }
 #endif
@@ -264,8 +277,12 @@ void App::process_in_time_order() {
 
 // GNSS fixes arrive late (their latency) and at a few hertz: each is checked
 // and fused after the cycle's IMU and ranges, at its own time of validity.
+// Fixes come from the CAN bus (GNSS_Fix*, decoded this cycle) and from the
+// board's GnssSource (recordings, a receiver driver), in that order.
 void App::drain_gnss(uint64_t now_us) {
 #if UWBNAV_GNSS
+  for (size_t k = 0; k < can_gnss_count_; ++k) fuse_gnss(can_gnss_[k], now_us);
+  can_gnss_count_ = 0;
   if (board_.gnss == nullptr) return;
   GnssFix fix;
   for (size_t n = 0; n < kMaxGnssPerCycle; ++n) {
@@ -275,20 +292,26 @@ void App::drain_gnss(uint64_t now_us) {
       break;
     }
     if (!ok(s)) break;
-    ++stats_.gnss.received;
-    const Verdict v = validator_.check_gnss(fix, now_us);
-    if (!v.accepted) {
-      ++stats_.gnss.rejected[static_cast<size_t>(v.reason)];
-      continue;
-    }
-    ++stats_.gnss.accepted;
-    const GnssReport rep = nav_.on_gnss(fix);
-    if (observer_ != nullptr) observer_->on_gnss(rep);
+    fuse_gnss(fix, now_us);
   }
 #else
   static_cast<void>(now_us);
 #endif
 }
+
+#if UWBNAV_GNSS
+void App::fuse_gnss(const GnssFix& fix, uint64_t now_us) {
+  ++stats_.gnss.received;
+  const Verdict v = validator_.check_gnss(fix, now_us);
+  if (!v.accepted) {
+    ++stats_.gnss.rejected[static_cast<size_t>(v.reason)];
+    return;
+  }
+  ++stats_.gnss.accepted;
+  const GnssReport rep = nav_.on_gnss(fix);
+  if (observer_ != nullptr) observer_->on_gnss(rep);
+}
+#endif
 
 #if UWBNAV_COOP
 void App::accept_neighbour(const NeighbourState& s, uint64_t now_us) {

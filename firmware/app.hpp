@@ -103,6 +103,9 @@ class App {
   void process_in_time_order();
   void handle_range(const UwbRange& r);
   void drain_gnss(uint64_t now_us);
+#if UWBNAV_GNSS
+  void fuse_gnss(const GnssFix& fix, uint64_t now_us);  // validate, fuse, report
+#endif
 #if UWBNAV_COOP
   // Neighbour states from the board's source (recordings), before the cycle's
   // ranges so that a range finds the state broadcast before it.
@@ -121,6 +124,10 @@ class App {
   bool hil_rx_enabled_ = false;
   can::CanSensorSample can_pending_[kMaxCanPending];  // HIL samples due in a later cycle
   size_t can_pending_count_ = 0;
+#if UWBNAV_GNSS
+  GnssFix can_gnss_[kMaxGnssPerCycle];  // GNSS_Fix* decoded this cycle, fused in drain_gnss()
+  size_t can_gnss_count_ = 0;
+#endif
   AppStats stats_;
   uint32_t nav_base_[kNavCounters];  // navigator counters at the last reset_stats() (zeroed by init())
   AppObserver* observer_ = nullptr;

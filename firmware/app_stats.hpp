@@ -88,7 +88,8 @@ struct AppStats {
   SourceStats uwb;
   SourceStats can_rx;             // HIL sensor frames received over CAN
 #if UWBNAV_GNSS
-  SourceStats gnss;               // GNSS fixes (board GnssSource), zero on boards without one
+  SourceStats gnss;               // GNSS fixes (CAN GNSS_Fix* and the board's GnssSource); io_errors
+                                  // also counts CAN fixes beyond kMaxGnssPerCycle in one cycle
 #endif
 #if UWBNAV_COOP
   // Neighbour vehicles' broadcast states (board NeighbourSource or CAN V2X_Neighbour*).

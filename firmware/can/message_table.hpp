@@ -9,13 +9,18 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "estimator/params.hpp"  // UWBNAV_COOP
+#include "estimator/params.hpp"  // UWBNAV_COOP, UWBNAV_GNSS
+
+// Wide (32-bit position) signals and "not reported" codes: used by the
+// cooperative groups and the GNSS fix group, compiled when either is.
+#define UWBNAV_CAN_WIDE (UWBNAV_COOP || UWBNAV_GNSS)
 
 namespace uwbnav::can {
 
 // 11-bit identifiers (docs/can.md). Outputs 0x100..0x106, HIL inputs 0x0A0..0x0B1;
 // with cooperative positioning (UWBNAV_COOP) this vehicle's state 0x110..0x115
-// and neighbour states from the V2X gateway 0x0C0..0x0C5.
+// and neighbour states from the V2X gateway 0x0C0..0x0C5; with GNSS fusion
+// (UWBNAV_GNSS) receiver fixes from the GNSS gateway 0x0D0..0x0D4.
 enum class MsgId : uint16_t {
   kNavTime = 0x100,      // output: time of the solution the 10 ms group belongs to
   kPosXY = 0x101,        // output: horizontal position + status
@@ -45,6 +50,14 @@ enum class MsgId : uint16_t {
   kNeighbourSigma = 0x0C4, // input: part 5
   kNeighbourCorr = 0x0C5,  // input: part 6
 #endif
+#if UWBNAV_GNSS
+  // GNSS fusion (issue 16 item 2): one receiver fix in five frames with the same alive counter.
+  kGnssFixTime = 0x0D0,   // input from the GNSS gateway: fix type, satellites, time of validity
+  kGnssFixPosX = 0x0D1,   // input: antenna x, vx
+  kGnssFixPosY = 0x0D2,   // input: antenna y, vy
+  kGnssFixPosZ = 0x0D3,   // input: antenna z, vz
+  kGnssFixSigma = 0x0D4,  // input: position and velocity 1-sigmas
+#endif
 };
 
 constexpr uint32_t id_of(MsgId m) { return static_cast<uint32_t>(m); }
@@ -54,7 +67,7 @@ enum class NonFinite : uint8_t {
   kZeroFlagged = 0,  // raw for physical 0 (clipped into range), Saturated flag set
   kMaxFlagged,       // raw maximum (e.g. an unknown sigma is "worst"), Saturated flag set
   kRawZeroNa,        // raw 0 is the "not available" code; no flag; decodes to NaN
-#if UWBNAV_COOP
+#if UWBNAV_CAN_WIDE
   kRawMinNa,         // the field minimum (e.g. int16 0x8000) is the "not reported" code; no flag; decodes to
                      // NaN. The signal's min lies above it, so clipping never produces the code.
 #endif
@@ -118,6 +131,7 @@ constexpr uint8_t kMaxSignals = 8;
 inline constexpr const char* kNodeUwbnav = "UWBNAV";
 inline constexpr const char* kNodeHilRig = "HIL_RIG";
 inline constexpr const char* kNodeV2xGw = "V2X_GW";
+inline constexpr const char* kNodeGnssGw = "GNSS_GW";
 inline constexpr const char* kOutputReceivers = "VEHICLE,HIL_RIG";
 
 // ---- The table (single source of truth; docs/can.md, docs/uwbnav.dbc) ---------
@@ -352,6 +366,62 @@ inline constexpr SignalDef kNeighbourCorrSignals[] = {UWBNAV_COOP_CORR_SIGNALS("
 #undef UWBNAV_COOP_CORR_SIGNALS
 #endif  // UWBNAV_COOP
 
+#if UWBNAV_GNSS
+// GNSS fixes (docs/can.md "GNSS fixes"): the receiver's (or its gateway's)
+// solution already in the navigation frame, as in gnss.csv
+// (docs/dataset-format.md). Five frames, the same alive counter.
+inline constexpr ValueName kGnssFixTypeValues[] = {{0, "no_fix"}, {1, "single"}, {2, "dgnss"}, {4, "rtk_fixed"},
+                                                    {5, "rtk_float"}};
+inline constexpr ValueName kGnssNotReportedValues[] = {{-32768, "not_reported"}};
+inline constexpr ValueName kGnssVelSigmaValues[] = {{0, "not_reported"}};
+inline constexpr SignalDef kGnssFixTimeSignals[] = {
+    UWBNAV_CAN_HEADER("GnssFixTime"),
+    {"Gnss_FixType", 12, 3, false, 1.0, 0.0, 0.0, 7.0, "",
+     "fix type, NMEA GGA quality codes: 0 no fix (the receiver drops the fix), 1 single, 2 DGNSS, 4 RTK fixed, "
+     "5 RTK float; 3, 6 and 7 are refused",
+     NonFinite::kZeroFlagged, kGnssFixTypeValues, 5},
+    {"Gnss_NumSv", 16, 8, false, 1.0, 0.0, 0.0, 255.0, "", "satellites used in the fix, 0 = not reported",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"Gnss_TimeUs", 32, 32, false, 1.0, 0.0, 0.0, 4294967295.0, "us",
+     "time of validity of the fix, low 32 bits of the common us time base (wraps every 71.6 min)",
+     NonFinite::kZeroFlagged, nullptr, 0},
+};
+inline constexpr SignalDef kGnssFixPosXSignals[] = {
+    UWBNAV_CAN_HEADER("GnssFixPosX"),
+    {"Gnss_PosX", 16, 32, true, 0.001, 0.0, -2147483.648, 2147483.647, "m", "antenna x in the navigation frame",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"Gnss_VelX", 48, 16, true, 0.01, 0.0, -327.67, 327.67, "m/s",
+     "antenna velocity x, navigation frame; raw -32768 = not reported", NonFinite::kRawMinNa, kGnssNotReportedValues, 1},
+};
+inline constexpr SignalDef kGnssFixPosYSignals[] = {
+    UWBNAV_CAN_HEADER("GnssFixPosY"),
+    {"Gnss_PosY", 16, 32, true, 0.001, 0.0, -2147483.648, 2147483.647, "m", "antenna y in the navigation frame",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"Gnss_VelY", 48, 16, true, 0.01, 0.0, -327.67, 327.67, "m/s",
+     "antenna velocity y, navigation frame; raw -32768 = not reported", NonFinite::kRawMinNa, kGnssNotReportedValues, 1},
+};
+inline constexpr SignalDef kGnssFixPosZSignals[] = {
+    UWBNAV_CAN_HEADER("GnssFixPosZ"),
+    {"Gnss_PosZ", 16, 25, true, 0.001, 0.0, -16777.216, 16777.215, "m", "antenna z (up) in the navigation frame",
+     NonFinite::kZeroFlagged, nullptr, 0},
+    {"Gnss_VelZ", 48, 16, true, 0.01, 0.0, -327.67, 327.67, "m/s",
+     "antenna velocity z (up), navigation frame; raw -32768 = not reported", NonFinite::kRawMinNa,
+     kGnssNotReportedValues, 1},
+};
+inline constexpr SignalDef kGnssFixSigmaSignals[] = {
+    UWBNAV_CAN_HEADER("GnssFixSigma"),
+    {"Gnss_SigmaX", 16, 12, false, 0.005, 0.0, 0.0, 20.475, "m",
+     "receiver's claimed 1-sigma of x (larger or unknown: maximum, flagged, and the fix is dropped)",
+     NonFinite::kMaxFlagged, nullptr, 0},
+    {"Gnss_SigmaY", 28, 12, false, 0.005, 0.0, 0.0, 20.475, "m", "receiver's claimed 1-sigma of y",
+     NonFinite::kMaxFlagged, nullptr, 0},
+    {"Gnss_SigmaZ", 40, 12, false, 0.005, 0.0, 0.0, 20.475, "m", "receiver's claimed 1-sigma of z",
+     NonFinite::kMaxFlagged, nullptr, 0},
+    {"Gnss_VelSigma", 52, 12, false, 0.005, 0.0, 0.005, 20.475, "m/s",
+     "receiver's claimed 1-sigma per velocity axis; raw 0 = not reported", NonFinite::kRawZeroNa,
+     kGnssVelSigmaValues, 1},
+};
+#endif  // UWBNAV_GNSS
 #undef UWBNAV_CAN_HEADER
 
 template <size_t N>
@@ -434,6 +504,22 @@ inline constexpr MessageDef kMessages[] = {
     UWBNAV_COOP_MESSAGE(kNeighbourCorr, "V2X_NeighbourCorr", 0, kNodeV2xGw, kNodeUwbnav,
                         "Neighbour vehicle state part 6 of 6: position correlation coefficients.", kNeighbourCorrSignals),
 #undef UWBNAV_COOP_MESSAGE
+#endif
+#if UWBNAV_GNSS
+#define UWBNAV_GNSS_MESSAGE(ID, NAME, COMMENT, SIGNALS) \
+  {id_of(MsgId::ID), NAME, 8, table::data_id_for(MsgId::ID), 0, kNodeGnssGw, kNodeUwbnav, COMMENT, table::SIGNALS, \
+   table::count_of(table::SIGNALS)}
+    UWBNAV_GNSS_MESSAGE(kGnssFixTime, "GNSS_FixTime",
+                        "GNSS fix from the receiver gateway, part 1 of 5 (fix type, satellites, time of validity), in the "
+                        "navigation frame like gnss.csv. The five parts of one fix carry the same alive counter and are sent "
+                        "in order, a whole fix before the next. Decoded, validated (gnss.* checks), then fused at its time.",
+                        kGnssFixTimeSignals),
+    UWBNAV_GNSS_MESSAGE(kGnssFixPosX, "GNSS_FixPosX", "GNSS fix part 2 of 5: antenna x and vx.", kGnssFixPosXSignals),
+    UWBNAV_GNSS_MESSAGE(kGnssFixPosY, "GNSS_FixPosY", "GNSS fix part 3 of 5: antenna y and vy.", kGnssFixPosYSignals),
+    UWBNAV_GNSS_MESSAGE(kGnssFixPosZ, "GNSS_FixPosZ", "GNSS fix part 4 of 5: antenna z and vz.", kGnssFixPosZSignals),
+    UWBNAV_GNSS_MESSAGE(kGnssFixSigma, "GNSS_FixSigma", "GNSS fix part 5 of 5: position and velocity 1-sigmas.",
+                        kGnssFixSigmaSignals),
+#undef UWBNAV_GNSS_MESSAGE
 #endif
 };
 

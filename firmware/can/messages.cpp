@@ -19,7 +19,7 @@ static_assert(std::numeric_limits<float>::is_iec559, "raw_from_phys decodes IEEE
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr int64_t kScaledRawLimit = int64_t{1} << 24;  // raw (and raw - raw_zero) exact in float
-#if UWBNAV_COOP
+#if UWBNAV_CAN_WIDE
 // Wide signals (the cooperative positions, 32 bit): raw - raw_zero up to 2^31,
 // decoded by an exact integer division (quotient_nearest) instead of in float.
 constexpr int64_t kWideRawLimit = int64_t{1} << 31;
@@ -46,7 +46,7 @@ constexpr bool is_count(const SignalDef& s) {
 // A "not reported" code outside the signal's clipping range (kRawMinNa: the
 // field minimum, below the raw value of min) never collides with a value.
 constexpr bool na_code_ok(const SignalDef& s) {
-#if UWBNAV_COOP
+#if UWBNAV_CAN_WIDE
   if (s.non_finite == NonFinite::kRawMinNa) return s.is_signed && raw_of(s, s.min) > field_min(s);
 #endif
   static_cast<void>(s);
@@ -73,7 +73,7 @@ constexpr bool is_scaled(const SignalDef& s) { return is_scaled_within(s, kScale
 // 'w': a wide scaled value (at most 32 bits, |raw - raw_zero| up to 2^31):
 // encoded like 'p', decoded by an exact integer division (quotient_nearest).
 constexpr bool is_wide(const SignalDef& s) {
-#if UWBNAV_COOP
+#if UWBNAV_CAN_WIDE
   return !is_scaled(s) && s.bit_len <= 32 && is_scaled_within(s, kWideRawLimit);
 #else
   static_cast<void>(s);
@@ -215,7 +215,7 @@ constexpr float kPiBelowF = 3.14159250F;
 static_assert(static_cast<double>(kPiBelowF) < kPi && static_cast<double>(kPiBelowF) + 0x1p-22 > kPi,
               "kPiBelowF must be the float just below pi (ulp 2^-22 in [2, 4))");
 
-#if UWBNAV_COOP
+#if UWBNAV_CAN_WIDE
 // The float nearest to n / d (ties to even), for a wide signal's
 // raw - raw_zero = n (|n| <= 2^31) and d = 1 / factor: the integer quotient to
 // 47+ bits with a sticky remainder, rounded once to 24 bits. Exact like the
@@ -276,7 +276,7 @@ int64_t raw_from_phys(const SignalLayout& s, float phys, bool* flagged) {
       case NonFinite::kMaxFlagged:
         *flagged = true;
         return s.raw_max;
-#if UWBNAV_COOP
+#if UWBNAV_CAN_WIDE
       case NonFinite::kRawMinNa:
         return -(int64_t{1} << (s.bit_len - 1));
 #endif
@@ -334,7 +334,7 @@ int64_t raw_from_count(const SignalLayout& s, uint64_t count, bool* flagged) {
 
 float phys_from_raw(const SignalLayout& s, int64_t raw) {
   if (s.non_finite == NonFinite::kRawZeroNa && raw == 0) return std::numeric_limits<float>::quiet_NaN();
-#if UWBNAV_COOP
+#if UWBNAV_CAN_WIDE
   if (s.non_finite == NonFinite::kRawMinNa && raw == -(int64_t{1} << (s.bit_len - 1))) {
     return std::numeric_limits<float>::quiet_NaN();
   }
@@ -469,7 +469,6 @@ static_assert(kinds_are(MsgId::kCoopPosY, "wp"));
 static_assert(kinds_are(MsgId::kCoopPosZ, "pp"));
 static_assert(kinds_are(MsgId::kCoopSigma, "ppp"));
 static_assert(kinds_are(MsgId::kCoopCorr, "ppp"));
-static_assert(kNumMessages == 24, "a new message needs its kinds_are() line and typed encode/decode");
 
 // The two cooperative groups have the identical layout, part by part, and
 // their ids are consecutive in part order (coop_id()).
@@ -512,16 +511,6 @@ const MessageLayout& coop_layout(CoopGroup g, size_t part) {
   return kLayouts.messages[kCoopIndex[static_cast<size_t>(g)][part]];
 }
 
-float component(const Vec3f& v, size_t axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
-void set_component(Vec3f& v, size_t axis, float value) {
-  if (axis == 0) {
-    v.x = value;
-  } else if (axis == 1) {
-    v.y = value;
-  } else {
-    v.z = value;
-  }
-}
 
 // Correlation coefficient of a covariance entry, clamped to [-1, 1]; 0 when a
 // sigma is 0 or not finite (the sigma itself is then sent flagged), NaN (sent
@@ -532,9 +521,44 @@ float correlation(float cov, float sigma_a, float sigma_b) {
   if (!(den > 0.0F) || !std::isfinite(den)) return 0.0F;
   return std::fmin(std::fmax(cov / den, -1.0F), 1.0F);
 }
-#else
-static_assert(kNumMessages == 12, "a new message needs its kinds_are() line and typed encode/decode");
+#endif  // UWBNAV_COOP
+
+#if UWBNAV_GNSS
+static_assert(kinds_are(MsgId::kGnssFixTime, "ccc"));
+static_assert(kinds_are(MsgId::kGnssFixPosX, "wp"));
+static_assert(kinds_are(MsgId::kGnssFixPosY, "wp"));
+static_assert(kinds_are(MsgId::kGnssFixPosZ, "pp"));
+static_assert(kinds_are(MsgId::kGnssFixSigma, "pppp"));
+constexpr bool gnss_ids_consecutive() {
+  const MsgId parts[kGnssFrames] = {MsgId::kGnssFixTime, MsgId::kGnssFixPosX, MsgId::kGnssFixPosY,
+                                    MsgId::kGnssFixPosZ, MsgId::kGnssFixSigma};
+  for (size_t k = 0; k < kGnssFrames; ++k) {
+    if (id_of(parts[k]) != gnss_id(k)) return false;
+  }
+  return true;
+}
+static_assert(gnss_ids_consecutive(), "GNSS_Fix* ids are consecutive in part order (gnss_id())");
+constexpr size_t kGnssIndex[kGnssFrames] = {index_of(MsgId::kGnssFixTime), index_of(MsgId::kGnssFixPosX),
+                                            index_of(MsgId::kGnssFixPosY), index_of(MsgId::kGnssFixPosZ),
+                                            index_of(MsgId::kGnssFixSigma)};
+const MessageLayout& gnss_layout(size_t part) { return kLayouts.messages[kGnssIndex[part]]; }
+#endif  // UWBNAV_GNSS
+
+#if UWBNAV_CAN_WIDE
+float component(const Vec3f& v, size_t axis) { return axis == 0 ? v.x : (axis == 1 ? v.y : v.z); }
+void set_component(Vec3f& v, size_t axis, float value) {
+  if (axis == 0) {
+    v.x = value;
+  } else if (axis == 1) {
+    v.y = value;
+  } else {
+    v.z = value;
+  }
+}
 #endif
+
+static_assert(kNumMessages == 12 + (UWBNAV_COOP ? 12 : 0) + (UWBNAV_GNSS ? 5 : 0),
+              "a new message needs its kinds_are() line and typed encode/decode");
 
 NavStatus status_from(uint64_t v) { return static_cast<NavStatus>(v & 0x3U); }
 
@@ -891,5 +915,109 @@ Status decode_coop(const hal::CanFrame (&in)[kCoopFrames], CoopGroup g, uint64_t
   return Status::kOk;
 }
 #endif  // UWBNAV_COOP
+
+#if UWBNAV_GNSS
+bool encode_gnss_part(const GnssParts& p, size_t part, uint8_t counter, hal::CanFrame& out) {
+  if (part >= kGnssFrames) part = kGnssFrames - 1;  // callers pass 0..4
+  Packer pk(gnss_layout(part), out);
+  switch (part) {
+    case 0:
+      pk.count(p.fix_type);
+      pk.count(p.num_sv);
+      pk.count(p.t_sensor_us);
+      break;
+    case 1:
+    case 2:
+    case 3:
+      pk.phys(component(p.pos_nav_m, part - 1));
+      pk.phys(component(p.vel_nav_mps, part - 1));
+      break;
+    default:
+      pk.phys(p.sigma_m.x);
+      pk.phys(p.sigma_m.y);
+      pk.phys(p.sigma_m.z);
+      pk.phys(p.vel_sigma_mps);
+      break;
+  }
+  return pk.finish(counter);
+}
+
+Status decode_gnss_part(const hal::CanFrame& f, size_t part, GnssParts& p, FrameMeta* meta) {
+  if (part >= kGnssFrames) return Status::kInvalidArgument;
+  Unpacker u(gnss_layout(part), f);
+  const Status s = u.check(meta);
+  if (s != Status::kOk) return s;
+  switch (part) {
+    case 0:
+      p.fix_type = static_cast<uint8_t>(u.count());
+      p.num_sv = static_cast<uint8_t>(u.count());
+      p.t_sensor_us = static_cast<uint32_t>(u.count());
+      break;
+    case 1:
+    case 2:
+    case 3:
+      set_component(p.pos_nav_m, part - 1, u.phys());
+      set_component(p.vel_nav_mps, part - 1, u.phys());
+      break;
+    default:
+      p.sigma_m.x = u.phys();
+      p.sigma_m.y = u.phys();
+      p.sigma_m.z = u.phys();
+      p.vel_sigma_mps = u.phys();
+      break;
+  }
+  return Status::kOk;
+}
+
+GnssParts gnss_parts_from(const GnssFix& fix) {
+  GnssParts p;
+  p.fix_type = static_cast<uint8_t>(fix.fix);
+  p.num_sv = fix.num_sv;
+  p.t_sensor_us = static_cast<uint32_t>(fix.t_us);
+  p.pos_nav_m = fix.pos_nav_m;
+  p.vel_nav_mps = fix.vel_nav_mps;
+  p.sigma_m = fix.pos_sigma_m;
+  p.vel_sigma_mps = fix.vel_sigma_mps;
+  return p;
+}
+
+Status gnss_fix_from(const GnssParts& p, uint64_t now_us, GnssFix& out) {
+  GnssFixType type = GnssFixType::kNone;
+  switch (p.fix_type) {
+    case static_cast<uint8_t>(GnssFixType::kSingle):
+      type = GnssFixType::kSingle;
+      break;
+    case static_cast<uint8_t>(GnssFixType::kDgnss):
+      type = GnssFixType::kDgnss;
+      break;
+    case static_cast<uint8_t>(GnssFixType::kRtkFixed):
+      type = GnssFixType::kRtkFixed;
+      break;
+    case static_cast<uint8_t>(GnssFixType::kRtkFloat):
+      type = GnssFixType::kRtkFloat;
+      break;
+    default:
+      return Status::kRejected;  // 0 no fix, 3/6/7 not a fix type of GnssFix
+  }
+  GnssFix f;
+  f.t_us = unwrap_time_us(p.t_sensor_us, now_us);
+  f.rx_t_us = now_us;
+  f.pos_nav_m = p.pos_nav_m;
+  f.pos_sigma_m = p.sigma_m;
+  f.vel_nav_mps = p.vel_nav_mps;
+  f.vel_sigma_mps = p.vel_sigma_mps;
+  f.fix = type;
+  f.num_sv = p.num_sv;
+  out = f;
+  return Status::kOk;
+}
+
+bool encode_gnss(const GnssFix& fix, uint8_t counter, hal::CanFrame (&out)[kGnssFrames]) {
+  const GnssParts p = gnss_parts_from(fix);
+  bool saturated = false;
+  for (size_t k = 0; k < kGnssFrames; ++k) saturated = encode_gnss_part(p, k, counter, out[k]) || saturated;
+  return saturated;
+}
+#endif  // UWBNAV_GNSS
 
 }  // namespace uwbnav::can

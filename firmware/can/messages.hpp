@@ -239,4 +239,45 @@ struct CoopMeta {
                                  NeighbourState& out, CoopMeta* meta = nullptr);
 #endif  // UWBNAV_COOP
 
+#if UWBNAV_GNSS
+// ---- GNSS fixes (docs/can.md "GNSS fixes") ----------------------------------
+//
+// One receiver fix (GnssFix, already in the navigation frame) travels as five
+// frames with the same alive counter, in part order: Time, PosX, PosY, PosZ,
+// Sigma (GNSS_Fix*, 0x0D0..0x0D4, from the GNSS gateway, received).
+constexpr size_t kGnssFrames = 5;
+
+// CAN id of part `part` (0..4).
+constexpr uint32_t gnss_id(size_t part) { return id_of(MsgId::kGnssFixTime) + static_cast<uint32_t>(part); }
+
+// The physical content of one group (what its five frames carry).
+struct GnssParts {
+  uint8_t fix_type = 0;      // Time: NMEA GGA quality code 0..7 (GnssFixType values are valid, others refused)
+  uint8_t num_sv = 0;        // Time: satellites used, 0 = not reported, saturates at 255
+  uint32_t t_sensor_us = 0;  // Time: low 32 bits of the time of validity [us]
+  Vec3f pos_nav_m;           // PosX/PosY/PosZ: antenna [m]; x, y 1 mm +-2147 km, z 1 mm +-16777 m
+  Vec3f vel_nav_mps{kNaNf, kNaNf, kNaNf};  // PosX/PosY/PosZ: velocity [m/s], 0.01, +-327.67; NaN = not reported
+  Vec3f sigma_m{kNaNf, kNaNf, kNaNf};      // Sigma: 1-sigma per axis [m], 5 mm, 0..20.475 (NaN or more: maximum, flagged)
+  float vel_sigma_mps = kNaNf;             // Sigma: 1-sigma per velocity axis [m/s], 5 mm/s, NaN = not reported
+};
+
+// Encodes part `part` (0..4) of `p` into `out` (id gnss_id(part), len 8; t_us
+// untouched); returns the Saturated flag. decode_gnss_part(): as the typed
+// decode() (kInvalidArgument also for a part > 4 or another id) and, on kOk,
+// fills only the fields of `p` that this part carries.
+bool encode_gnss_part(const GnssParts& p, size_t part, uint8_t counter, hal::CanFrame& out);
+[[nodiscard]] Status decode_gnss_part(const hal::CanFrame& f, size_t part, GnssParts& p, FrameMeta* meta = nullptr);
+
+// GnssFix -> group content (time truncated to its low 32 bits).
+GnssParts gnss_parts_from(const GnssFix& fix);
+// Group content -> GnssFix: t_us unwrapped against now_us (unwrap_time_us),
+// rx_t_us = now_us. kRejected (out untouched) when the fix type is 0 (no fix)
+// or not a GnssFixType value (3, 6, 7).
+[[nodiscard]] Status gnss_fix_from(const GnssParts& p, uint64_t now_us, GnssFix& out);
+
+// All five frames of one fix with the same alive counter. Returns true when any
+// frame carries the Saturated flag (receivers drop such a fix).
+bool encode_gnss(const GnssFix& fix, uint8_t counter, hal::CanFrame (&out)[kGnssFrames]);
+#endif  // UWBNAV_GNSS
+
 }  // namespace uwbnav::can

@@ -5,7 +5,8 @@ namespace uwbnav::can {
 namespace {
 
 // Receiver index = position in this list: HIL IMU parts, HIL UWB parts, then
-// (UWBNAV_COOP) the V2X_Neighbour parts in group order.
+// (UWBNAV_COOP) the V2X_Neighbour parts and (UWBNAV_GNSS) the GNSS_Fix parts,
+// each in group order.
 constexpr uint32_t kInputIds[] = {id_of(MsgId::kHilImuTime), id_of(MsgId::kHilImuAccel),
                                   id_of(MsgId::kHilImuGyro), id_of(MsgId::kHilUwbRange),
                                   id_of(MsgId::kHilUwbTime)
@@ -14,12 +15,19 @@ constexpr uint32_t kInputIds[] = {id_of(MsgId::kHilImuTime), id_of(MsgId::kHilIm
                                   coop_id(CoopGroup::kNeighbour, 2), coop_id(CoopGroup::kNeighbour, 3),
                                   coop_id(CoopGroup::kNeighbour, 4), coop_id(CoopGroup::kNeighbour, 5)
 #endif
+#if UWBNAV_GNSS
+                                  , gnss_id(0), gnss_id(1), gnss_id(2), gnss_id(3), gnss_id(4)
+#endif
 };
 constexpr uint8_t kImuAll = 0x7;
 constexpr uint8_t kUwbAll = 0x3;
 #if UWBNAV_COOP
 constexpr uint8_t kNeighbourAll = 0x3F;
 static_assert(kCoopFrames == 6, "kNeighbourAll has a bit per part");
+#endif
+#if UWBNAV_GNSS
+constexpr uint8_t kGnssAll = 0x1F;
+static_assert(kGnssFrames == 5, "kGnssAll has a bit per part");
 #endif
 
 }  // namespace
@@ -61,6 +69,9 @@ void CanSensorDecoder::reset() {
 #if UWBNAV_COOP
   neighbour_ = NeighbourGroup{};
 #endif
+#if UWBNAV_GNSS
+  gnss_ = GnssGroup{};
+#endif
   stats_ = CanSensorStats{};
 }
 
@@ -100,12 +111,15 @@ Status CanSensorDecoder::on_frame(const hal::CanFrame& f, uint64_t now_us, CanSe
   static_assert(sizeof kInputIds / sizeof kInputIds[0] == kNumInputs, "one receiver per input id");
   for (size_t i = 0; i < kNumInputs; ++i) {
     if (f.id != kInputIds[i]) continue;
-#if UWBNAV_COOP
+#if UWBNAV_COOP || UWBNAV_GNSS
     if (i < kNumHilInputs && !hil_enabled_) return Status::kNotFound;
 #endif
     const Status s = check(i, *find_layout(f.id), f);
     if (s != Status::kOk) return s;
     if (i < kImuFrames) return on_imu_part(i, f, now_us, out);
+#if UWBNAV_GNSS
+    if (i >= kFirstGnssInput) return on_gnss_part(i - kFirstGnssInput, f, now_us, out);
+#endif
 #if UWBNAV_COOP
     if (i >= kNumHilInputs) return on_neighbour_part(i - kNumHilInputs, f, now_us, out);
 #endif
@@ -224,5 +238,42 @@ Status CanSensorDecoder::on_neighbour_part(size_t part, const hal::CanFrame& f, 
   return Status::kOk;
 }
 #endif  // UWBNAV_COOP
+
+#if UWBNAV_GNSS
+// The five parts of one GNSS fix, grouped by alive counter like the neighbour
+// states: a complete group is dropped when a part was flagged (saturated:
+// e.g. a claimed sigma above 20.475 m) or it carries no usable fix type.
+Status CanSensorDecoder::on_gnss_part(size_t part, const hal::CanFrame& f, uint64_t now_us, CanSensorSample& out) {
+  FrameMeta meta;
+  GnssParts parts = gnss_.parts;
+  if (decode_gnss_part(f, part, parts, &meta) != Status::kOk) {
+    return Status::kRejected;  // unreachable after check(); defensive
+  }
+  if (gnss_.have != 0 && gnss_.counter != meta.counter) {
+    ++stats_.incomplete;
+    gnss_ = GnssGroup{};
+    parts = GnssParts{};
+    static_cast<void>(decode_gnss_part(f, part, parts, nullptr));  // this part, fresh group
+  }
+  gnss_.parts = parts;
+  gnss_.counter = meta.counter;
+  gnss_.have = static_cast<uint8_t>(gnss_.have | (1U << part));
+  gnss_.saturated = gnss_.saturated || meta.saturated;
+  if (gnss_.have != kGnssAll) return Status::kEmpty;
+  const GnssGroup done = gnss_;
+  gnss_ = GnssGroup{};
+  if (done.saturated) {
+    ++stats_.saturated;
+    return Status::kRejected;
+  }
+  if (gnss_fix_from(done.parts, now_us, out.gnss) != Status::kOk) {
+    ++stats_.gnss_no_fix;
+    return Status::kRejected;
+  }
+  out.kind = SensorKind::kGnss;
+  ++stats_.gnss_fixes;
+  return Status::kOk;
+}
+#endif  // UWBNAV_GNSS
 
 }  // namespace uwbnav::can

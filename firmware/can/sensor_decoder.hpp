@@ -2,7 +2,8 @@
 // and the firmware-side decoder (frames -> samples) with E2E checks, multi-frame
 // grouping by alive counter and 32-bit timestamp reconstruction. With
 // UWBNAV_COOP the decoder also reassembles neighbour vehicles' states
-// (V2X_Neighbour*, relayed by the V2X gateway) with the same rules.
+// (V2X_Neighbour*, relayed by the V2X gateway), with UWBNAV_GNSS receiver
+// fixes (GNSS_Fix*, from the GNSS gateway), with the same rules.
 #pragma once
 
 #include <cstddef>
@@ -38,7 +39,7 @@ class CanSensorEncoder {
 };
 
 struct CanSensorStats {
-  uint32_t frames = 0;          // input frames seen (HIL and V2X_Neighbour, any verdict)
+  uint32_t frames = 0;          // input frames seen (HIL, V2X_Neighbour, GNSS_Fix; any verdict)
   uint32_t crc_errors = 0;      // wrong CRC: dropped
   uint32_t counter_errors = 0;  // repeated / wrong sequence / counter 15: dropped
   uint32_t length_errors = 0;   // wrong DLC, extended or error frame: dropped
@@ -51,6 +52,10 @@ struct CanSensorStats {
   uint32_t neighbour_states = 0;   // complete V2X_Neighbour states delivered
   uint32_t neighbour_invalid = 0;  // complete V2X_Neighbour states dropped: Valid = 0 (sender says do not use)
 #endif
+#if UWBNAV_GNSS
+  uint32_t gnss_fixes = 0;   // complete GNSS_Fix groups delivered
+  uint32_t gnss_no_fix = 0;  // complete GNSS_Fix groups dropped: fix type 0 (no fix) or not a known type
+#endif
 };
 
 enum class SensorKind : uint8_t {
@@ -59,6 +64,9 @@ enum class SensorKind : uint8_t {
   kUwb,
 #if UWBNAV_COOP
   kNeighbour,  // a neighbour vehicle's broadcast state (V2X_Neighbour*)
+#endif
+#if UWBNAV_GNSS
+  kGnss,       // a GNSS receiver fix (GNSS_Fix*)
 #endif
 };
 
@@ -72,6 +80,11 @@ struct CanSensorSample {
   // group's last frame, covariance rebuilt from the sigmas and correlations.
   NeighbourState neighbour;
 #endif
+#if UWBNAV_GNSS
+  // Valid when kind == kGnss: t_us unwrapped like the neighbour time,
+  // rx_t_us = now_us at the group's last frame.
+  GnssFix gnss;
+#endif
 };
 
 // Firmware side. Delivered samples still go through InputValidator like any
@@ -81,10 +94,10 @@ class CanSensorDecoder {
   // Reads can.e2e_max_delta.
   void configure(const Params& params);
 
-#if UWBNAV_COOP
+#if UWBNAV_COOP || UWBNAV_GNSS
   // HIL_Imu*/HIL_Uwb* frames are decoded only while enabled (default: enabled);
   // disabled they are kNotFound like any foreign frame, while V2X_Neighbour*
-  // frames are still decoded. The App mirrors can.hil_rx_enable here.
+  // and GNSS_Fix* frames are still decoded. The App mirrors can.hil_rx_enable here.
   void set_hil_enabled(bool enabled) { hil_enabled_ = enabled; }
   bool hil_enabled() const { return hil_enabled_; }
 #endif
@@ -103,10 +116,17 @@ class CanSensorDecoder {
  private:
   static constexpr size_t kNumHilInputs = kImuFrames + kUwbFrames;
 #if UWBNAV_COOP
-  static constexpr size_t kNumInputs = kNumHilInputs + kCoopFrames;
+  static constexpr size_t kNumCoopInputs = kCoopFrames;
 #else
-  static constexpr size_t kNumInputs = kNumHilInputs;
+  static constexpr size_t kNumCoopInputs = 0;
 #endif
+#if UWBNAV_GNSS
+  static constexpr size_t kNumGnssInputs = kGnssFrames;
+#else
+  static constexpr size_t kNumGnssInputs = 0;
+#endif
+  static constexpr size_t kFirstGnssInput = kNumHilInputs + kNumCoopInputs;
+  static constexpr size_t kNumInputs = kFirstGnssInput + kNumGnssInputs;
   Status check(size_t input, const MessageLayout& m, const hal::CanFrame& f);
   Status on_imu_part(size_t part, const hal::CanFrame& f, uint64_t now_us, CanSensorSample& out);
   Status on_uwb_part(size_t part, const hal::CanFrame& f, uint64_t now_us, CanSensorSample& out);
@@ -135,6 +155,18 @@ class CanSensorDecoder {
     CoopParts parts;
   };
   NeighbourGroup neighbour_;
+#endif
+#if UWBNAV_GNSS
+  Status on_gnss_part(size_t part, const hal::CanFrame& f, uint64_t now_us, CanSensorSample& out);
+  struct GnssGroup {
+    uint8_t counter = 0;
+    uint8_t have = 0;  // bit per part (kGnssFrames)
+    bool saturated = false;
+    GnssParts parts;
+  };
+  GnssGroup gnss_;
+#endif
+#if UWBNAV_COOP || UWBNAV_GNSS
   bool hil_enabled_ = true;
 #endif
 

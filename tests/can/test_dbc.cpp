@@ -44,7 +44,8 @@ std::string make_dbc() {
   o << "VERSION \"uwbnav-can-1\"\n\n\n"
     << "NS_ :\n\tNS_DESC_\n\tCM_\n\tBA_DEF_\n\tBA_\n\tVAL_\n\tBA_DEF_DEF_\n\n"
     << "BS_:\n\n"
-    << "BU_: UWBNAV HIL_RIG VEHICLE" << (UWBNAV_COOP ? " V2X_GW" : "") << "\n\n\n";
+    << "BU_: UWBNAV HIL_RIG VEHICLE" << (UWBNAV_COOP ? " V2X_GW" : "") << (UWBNAV_GNSS ? " GNSS_GW" : "")
+    << "\n\n\n";
   for (size_t i = 0; i < kNumMessages; ++i) {
     const MessageDef& m = kMessages[i];
     o << "BO_ " << m.id << ' ' << m.name << ": " << static_cast<int>(m.dlc) << ' ' << m.transmitter << '\n';
@@ -67,6 +68,10 @@ std::string make_dbc() {
 #if UWBNAV_COOP
   o << "CM_ BU_ V2X_GW \"V2X / UWB-data gateway: forwards UWBNAV_Coop* to other vehicles and relays their states as "
        "V2X_Neighbour* (cooperative positioning)\";\n";
+#endif
+#if UWBNAV_GNSS
+  o << "CM_ BU_ GNSS_GW \"GNSS receiver or its gateway: sends the receiver's fixes, already in the navigation frame, as "
+       "GNSS_Fix*\";\n";
 #endif
   for (size_t i = 0; i < kNumMessages; ++i) {
     const MessageDef& m = kMessages[i];

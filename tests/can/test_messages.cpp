@@ -448,5 +448,110 @@ TEST(CanCoop, GroupDecodeNeedsOneCounterTheRightIdsAndGoodCrcs) {
 }
 #endif  // UWBNAV_COOP
 
+#if UWBNAV_GNSS
+// ---- GNSS_Fix*: receiver fixes from the GNSS gateway -----------------------
+
+GnssFix gnss_fix_at(uint64_t t_us) {
+  GnssFix f;
+  f.t_us = t_us;
+  f.rx_t_us = t_us + 60000;
+  f.pos_nav_m = Vec3f{-1523.4567F, 20456.125F, 3.217F};
+  f.pos_sigma_m = Vec3f{0.8F, 0.9F, 1.7F};
+  f.vel_nav_mps = Vec3f{12.34F, -0.56F, kNan};
+  f.vel_sigma_mps = 0.15F;
+  f.fix = GnssFixType::kRtkFloat;
+  f.num_sv = 17;
+  return f;
+}
+
+TEST(CanGnss, FixesRoundTripWithinTheQuantisationAndNotReportedStaysNotReported) {
+  std::mt19937 rng(77);
+  std::uniform_real_distribution<float> horiz(-2.1e6F, 2.1e6F), vert(-16000.0F, 16000.0F), vel(-300.0F, 300.0F),
+      sig(0.005F, 20.0F);
+  const GnssFixType types[] = {GnssFixType::kSingle, GnssFixType::kDgnss, GnssFixType::kRtkFixed,
+                               GnssFixType::kRtkFloat};
+  for (int i = 0; i < 200; ++i) {
+    GnssFix f = gnss_fix_at(0x3456789ABCULL + static_cast<uint64_t>(i) * 100000U);
+    if (i > 0) {
+      f.pos_nav_m = Vec3f{horiz(rng), horiz(rng), vert(rng)};
+      f.vel_nav_mps = Vec3f{vel(rng), i % 3 == 0 ? kNan : vel(rng), vel(rng)};
+      f.pos_sigma_m = Vec3f{sig(rng), sig(rng), sig(rng)};
+      f.vel_sigma_mps = i % 5 == 0 ? kNan : sig(rng);
+      f.fix = types[i % 4];
+      f.num_sv = static_cast<uint8_t>(i);
+    }
+    hal::CanFrame frames[kGnssFrames];
+    ASSERT_FALSE(encode_gnss(f, static_cast<uint8_t>(i % 15), frames)) << i;
+    GnssParts parts;
+    for (size_t k = 0; k < kGnssFrames; ++k) {
+      EXPECT_EQ(frames[k].id, gnss_id(k));
+      FrameMeta meta;
+      ASSERT_EQ(decode_gnss_part(frames[k], k, parts, &meta), Status::kOk);
+      EXPECT_EQ(meta.counter, i % 15);
+      EXPECT_FALSE(meta.saturated);
+    }
+    GnssFix g;
+    const uint64_t now = f.t_us + 80000;
+    ASSERT_EQ(gnss_fix_from(parts, now, g), Status::kOk);
+    EXPECT_EQ(g.t_us, f.t_us) << "32-bit time unwrapped against the receiver clock";
+    EXPECT_EQ(g.rx_t_us, now);
+    EXPECT_EQ(g.fix, f.fix);
+    EXPECT_EQ(g.num_sv, f.num_sv);
+    // 1 mm steps (half a step plus the float's own spacing at 2000 km).
+    EXPECT_NEAR(g.pos_nav_m.x, f.pos_nav_m.x, 0.0005F + std::fabs(f.pos_nav_m.x) * 0x1p-23F);
+    EXPECT_NEAR(g.pos_nav_m.y, f.pos_nav_m.y, 0.0005F + std::fabs(f.pos_nav_m.y) * 0x1p-23F);
+    EXPECT_NEAR(g.pos_nav_m.z, f.pos_nav_m.z, 0.0005F + 1e-6F);
+    for (int a = 0; a < 3; ++a) {
+      const float want = a == 0 ? f.vel_nav_mps.x : (a == 1 ? f.vel_nav_mps.y : f.vel_nav_mps.z);
+      const float got = a == 0 ? g.vel_nav_mps.x : (a == 1 ? g.vel_nav_mps.y : g.vel_nav_mps.z);
+      if (std::isnan(want)) {
+        EXPECT_TRUE(std::isnan(got)) << "not reported stays not reported";
+      } else {
+        EXPECT_NEAR(got, want, 0.005F + 1e-5F);
+      }
+    }
+    EXPECT_NEAR(g.pos_sigma_m.x, f.pos_sigma_m.x, 0.0025F + 1e-6F);
+    EXPECT_NEAR(g.pos_sigma_m.z, f.pos_sigma_m.z, 0.0025F + 1e-6F);
+    if (std::isnan(f.vel_sigma_mps)) {
+      EXPECT_TRUE(std::isnan(g.vel_sigma_mps));
+    } else {
+      EXPECT_NEAR(g.vel_sigma_mps, f.vel_sigma_mps, 0.0025F + 1e-6F);
+    }
+  }
+}
+
+TEST(CanGnss, NoFixAndUnknownFixTypesAreRefusedAndOversizedOrUnknownSigmasAreFlagged) {
+  hal::CanFrame frames[kGnssFrames];
+  GnssFix f = gnss_fix_at(5000000);
+  GnssParts parts;
+  GnssFix out = gnss_fix_at(1);
+  // Fix type 0 (no fix) and the GGA codes GnssFix has no type for.
+  for (uint8_t type : {0, 3, 6, 7}) {
+    parts = gnss_parts_from(f);
+    parts.fix_type = type;
+    ASSERT_FALSE(encode_gnss_part(parts, 0, 3, frames[0]));
+    GnssParts back;
+    ASSERT_EQ(decode_gnss_part(frames[0], 0, back), Status::kOk);
+    EXPECT_EQ(back.fix_type, type);
+    EXPECT_EQ(gnss_fix_from(back, 5100000, out), Status::kRejected) << int{type};
+    EXPECT_EQ(out.t_us, 1U) << "a refused fix leaves the output untouched";
+  }
+  // A claimed sigma beyond 20.475 m and an unknown (NaN) position sigma: sent
+  // as the maximum with the Saturated flag (the decoder then drops the fix).
+  f.pos_sigma_m.x = 25.0F;
+  EXPECT_TRUE(encode_gnss(f, 0, frames));
+  f = gnss_fix_at(5000000);
+  f.pos_sigma_m.z = kNan;
+  EXPECT_TRUE(encode_gnss(f, 0, frames));
+  FrameMeta meta;
+  ASSERT_EQ(decode_gnss_part(frames[4], 4, parts, &meta), Status::kOk);
+  EXPECT_TRUE(meta.saturated);
+  EXPECT_NEAR(parts.sigma_m.z, 20.475F, 1e-5F);
+  // Wrong part for the id, and a part index past the group.
+  EXPECT_EQ(decode_gnss_part(frames[1], 2, parts), Status::kInvalidArgument);
+  EXPECT_EQ(decode_gnss_part(frames[1], kGnssFrames, parts), Status::kInvalidArgument);
+}
+#endif  // UWBNAV_GNSS
+
 }  // namespace
 }  // namespace uwbnav::can

@@ -357,5 +357,79 @@ TEST(CanSensorDecoderNeighbour, NeighbourStatesAreDecodedWhileHilInputIsDisabled
 }
 #endif  // UWBNAV_COOP
 
+#if UWBNAV_GNSS
+// ---- GNSS_Fix*: receiver fixes from the GNSS gateway -----------------------
+
+GnssFix fix_at(uint64_t t_us, GnssFixType type = GnssFixType::kDgnss) {
+  GnssFix f;
+  f.t_us = t_us;
+  f.rx_t_us = t_us;
+  f.pos_nav_m = Vec3f{45.5F, -12.25F, 1.5F};
+  f.pos_sigma_m = Vec3f{0.6F, 0.6F, 1.2F};
+  f.vel_nav_mps = Vec3f{3.0F, 0.5F, 0.0F};
+  f.vel_sigma_mps = 0.1F;
+  f.fix = type;
+  f.num_sv = 11;
+  return f;
+}
+
+Status feed_gnss(CanSensorDecoder& dec, const hal::CanFrame (&f)[kGnssFrames], uint64_t now_us, CanSensorSample& out,
+                 int skip = -1) {
+  Status last = Status::kEmpty;
+  for (size_t k = 0; k < kGnssFrames; ++k) {
+    if (static_cast<int>(k) == skip) continue;
+    last = dec.on_frame(f[k], now_us, out);
+    if (k + 1 < kGnssFrames && last == Status::kOk) ADD_FAILURE() << "fix complete before its last part";
+  }
+  return last;
+}
+
+TEST(CanSensorDecoderGnss, FixesAreReassembledWhileHilIsDisabledAndBadGroupsAreDroppedAndCounted) {
+  Params params;
+  CanSensorDecoder dec;
+  dec.configure(params);
+  dec.set_hil_enabled(false);  // a vehicle without a HIL rig still hears its GNSS gateway
+  CanSensorSample out;
+  hal::CanFrame f[kGnssFrames];
+  const uint64_t t = (uint64_t{1} << 32) + 1000;  // just past a wrap of the 32-bit time
+  ASSERT_FALSE(encode_gnss(fix_at(t), 0, f));
+  ASSERT_EQ(feed_gnss(dec, f, t + 70000, out), Status::kOk);
+  ASSERT_EQ(out.kind, SensorKind::kGnss);
+  EXPECT_EQ(out.gnss.t_us, t);
+  EXPECT_EQ(out.gnss.rx_t_us, t + 70000);
+  EXPECT_EQ(out.gnss.fix, GnssFixType::kDgnss);
+  EXPECT_EQ(out.gnss.num_sv, 11);
+  EXPECT_NEAR(out.gnss.pos_nav_m.x, 45.5F, 1e-5F);
+  EXPECT_NEAR(out.gnss.vel_sigma_mps, 0.1F, 1e-5F);
+
+  // Part 3 lost: the next group's first part (another counter) drops the partial one.
+  ASSERT_FALSE(encode_gnss(fix_at(t + 100000), 1, f));
+  EXPECT_EQ(feed_gnss(dec, f, t + 170000, out, 3), Status::kEmpty);
+  ASSERT_FALSE(encode_gnss(fix_at(t + 200000), 2, f));
+  EXPECT_EQ(feed_gnss(dec, f, t + 270000, out), Status::kOk);
+  EXPECT_EQ(out.gnss.t_us, t + 200000);
+  // No fix: dropped, counted.
+  ASSERT_FALSE(encode_gnss(fix_at(t + 300000, GnssFixType::kNone), 3, f));
+  EXPECT_EQ(feed_gnss(dec, f, t + 370000, out), Status::kRejected);
+  // A claimed sigma beyond the signal's range: flagged by the sender, dropped.
+  GnssFix wide = fix_at(t + 400000);
+  wide.pos_sigma_m.y = 30.0F;
+  ASSERT_TRUE(encode_gnss(wide, 4, f));
+  EXPECT_EQ(feed_gnss(dec, f, t + 470000, out), Status::kRejected);
+  // A corrupted part: rejected by the E2E check, the group never completes.
+  ASSERT_FALSE(encode_gnss(fix_at(t + 500000), 5, f));
+  f[1].data[4] ^= 0x10;
+  EXPECT_EQ(feed_gnss(dec, f, t + 570000, out, -1), Status::kEmpty);
+
+  const CanSensorStats& st = dec.stats();
+  EXPECT_EQ(st.gnss_fixes, 2U);
+  EXPECT_EQ(st.gnss_no_fix, 1U);
+  EXPECT_EQ(st.saturated, 1U);
+  EXPECT_EQ(st.incomplete, 1U);
+  EXPECT_EQ(st.crc_errors, 1U);
+  EXPECT_EQ(st.imu_samples + st.uwb_ranges, 0U);
+}
+#endif  // UWBNAV_GNSS
+
 }  // namespace
 }  // namespace uwbnav::can

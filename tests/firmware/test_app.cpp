@@ -252,6 +252,60 @@ TEST(FirmwareValidation, MalformedGnssFixesAreRejectedPerReasonAndNeverReachTheE
   EXPECT_EQ(obs.gnss, 2U);
 }
 
+// A vehicle whose GNSS receiver talks CAN (GNSS_Fix* from its gateway): fixes
+// from the bus pass the same validation as the board's GnssSource and reach
+// the estimator with HIL input off; a no-fix group and a flagged group are
+// dropped by the decoder and never counted as fixes.
+TEST(FirmwareGnss, FixesFromTheVehicleBusAreValidatedAndReachTheEstimatorWithoutHil) {
+  const SiteConfig site = square_site();
+  ScriptImu imu;
+  ScriptUwb uwb;
+  hal::LockstepClock clock;
+  hal::MemCanBus can;
+  hal::NullSerialPort serial;
+  hal::EmptyParamStore store;
+  hal::Board board{imu, uwb, can, serial, clock, store, site};  // no GnssSource: CAN only
+  App app(board);
+  ASSERT_TRUE(ok(app.init()));
+  ASSERT_LT(app.params()[ParamId::kCanHilRxEnable], 0.5F);
+  GnssCountingObserver obs;
+  app.set_observer(&obs);
+
+  auto send = [&](const GnssFix& fix, uint8_t counter, uint64_t rx_us) {
+    hal::CanFrame frames[can::kGnssFrames];
+    const bool saturated = can::encode_gnss(fix, counter, frames);
+    for (hal::CanFrame& f : frames) {
+      f.t_us = rx_us;
+      can.inject(f);
+    }
+    return saturated;
+  };
+  ASSERT_FALSE(send(gnss_fix(100000, 0), 0, 150000));    // good, 50 ms latency at the tick
+  app.tick(150000);
+  ASSERT_FALSE(send(gnss_fix(120000, 0), 1, 700000));    // latency 0.58 s > gnss.max_latency: out of range
+  app.tick(700000);
+  GnssFix none = gnss_fix(710000, 0);
+  none.fix = GnssFixType::kNone;
+  ASSERT_FALSE(send(none, 2, 760000));                   // no fix: dropped by the decoder
+  app.tick(760000);
+  GnssFix flagged = gnss_fix(770000, 0);
+  flagged.pos_sigma_m.x = 50.0F;
+  ASSERT_TRUE(send(flagged, 3, 800000));                 // sigma beyond the signal: flagged, dropped
+  app.tick(800000);
+  ASSERT_FALSE(send(gnss_fix(810000, 0), 4, 850000));    // good
+  app.tick(850000);
+
+  const AppStats& st = app.stats();
+  EXPECT_EQ(st.gnss.received, 3U);
+  EXPECT_EQ(st.gnss.accepted, 2U);
+  EXPECT_EQ(st.gnss.rejected[static_cast<size_t>(RejectReason::kOutOfRange)], 1U);
+  EXPECT_EQ(app.navigator().diagnostics().gnss_received, 2U);
+  EXPECT_EQ(obs.gnss, 2U);
+  EXPECT_EQ(app.can_rx_stats().gnss_fixes, 3U);
+  EXPECT_EQ(app.can_rx_stats().gnss_no_fix, 1U);
+  EXPECT_EQ(app.can_rx_stats().saturated, 1U);
+}
+
 #if UWBNAV_COOP
 NeighbourState neighbour(uint16_t id, uint64_t t_us, uint64_t latency_us) {
   NeighbourState s;

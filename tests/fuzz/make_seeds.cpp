@@ -33,7 +33,8 @@ void u16(Bytes& b, int v) {
 void frame(Bytes& b, const uwbnav::hal::CanFrame& f, uint8_t dt_ms) {
   // The selector table of tests/fuzz/fuzz_can_decoder.cpp.
   static constexpr uint32_t kIds[] = {0x0A0, 0x0A1, 0x0A2, 0x0B0, 0x0B1, 0x100, 0x105,
-                                      0x0C0, 0x0C1, 0x0C2, 0x0C3, 0x0C4, 0x0C5, 0x110};
+                                      0x0C0, 0x0C1, 0x0C2, 0x0C3, 0x0C4, 0x0C5, 0x110,
+                                      0x0D0, 0x0D1, 0x0D2, 0x0D3, 0x0D4};
   uint8_t sel = 0;
   for (uint8_t i = 0; i < sizeof kIds / sizeof kIds[0]; ++i) {
     if (kIds[i] == f.id) sel = i;
@@ -111,6 +112,34 @@ Bytes neighbour_seed(size_t n, bool with_imu) {
         (void)enc.encode_imu(m, imu);
         for (const auto& f : imu) frame(b, f, 0);
       }
+    }
+  }
+  return b;
+}
+#endif
+
+#if UWBNAV_GNSS
+// GNSS_Fix groups: `n` fixes at 5 Hz (RTK float, one without velocity), then a
+// no-fix group, then a group whose last part is lost.
+Bytes gnss_seed(size_t n) {
+  using namespace uwbnav;
+  Bytes b;
+  uint8_t counter = 0;
+  for (size_t i = 0; i < n + 2; ++i) {
+    GnssFix f;
+    f.t_us = 1000000 + i * 200000;
+    f.pos_nav_m = Vec3f{5.0F + 1.0F * static_cast<float>(i), 15.0F, 1.7F};
+    f.pos_sigma_m = Vec3f{0.3F, 0.3F, 0.6F};
+    f.vel_nav_mps = i % 4 == 3 ? Vec3f{kNaNf, kNaNf, kNaNf} : Vec3f{5.0F, 0.0F, 0.0F};
+    f.vel_sigma_mps = i % 4 == 3 ? kNaNf : 0.05F;
+    f.fix = i == n ? GnssFixType::kNone : GnssFixType::kRtkFloat;
+    f.num_sv = 14;
+    hal::CanFrame g[can::kGnssFrames];
+    (void)can::encode_gnss(f, counter, g);
+    counter = can::next_alive_counter(counter);
+    for (size_t k = 0; k < can::kGnssFrames; ++k) {
+      if (i == n + 1 && k == can::kGnssFrames - 1) continue;  // a lost part: incomplete group
+      frame(b, g[k], k == 0 ? 100 : 0);
     }
   }
   return b;
@@ -217,6 +246,9 @@ int main(int argc, char** argv) {
 #if UWBNAV_COOP
   good = good && write(dir + "/fuzz_can_decoder/neighbour_valid", neighbour_seed(8, false));
   good = good && write(dir + "/fuzz_can_decoder/neighbour_imu_interleaved", neighbour_seed(6, true));
+#endif
+#if UWBNAV_GNSS
+  good = good && write(dir + "/fuzz_can_decoder/gnss_fixes", gnss_seed(5));
 #endif
   Params p;
   uint8_t blob[kParamBlobMaxBytes];
