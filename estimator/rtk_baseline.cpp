@@ -229,6 +229,7 @@ Status RtkBaseline::update(const RtkEpoch& epoch, RtkSolution& sol) {
   const bool init_save = initialised_;
   const uint32_t count_save = epoch_count_;
   auto restore = [&]() {
+    sol = RtkSolution{};
     x_ = x_save_;
     p_ = p_save_;
     for (int i = 0; i < kRtkMaxSats; ++i) {
@@ -264,13 +265,16 @@ Status RtkBaseline::update(const RtkEpoch& epoch, RtkSolution& sol) {
       restore();
       return Status::kFull;
     }
-    if (is_new || s.slip) reset_slot(epoch_slot_[i], s.carrier_sd_cyc - s.code_sd_m / params_.lambda_m);
+    restarted_[i] = is_new || s.slip;
+    if (restarted_[i]) reset_slot(epoch_slot_[i], s.carrier_sd_cyc - s.code_sd_m / params_.lambda_m);
   }
-  // Reference: highest elevation among the satellites without a slip.
+  // Reference: highest elevation among the satellites whose ambiguity did not
+  // restart this epoch (new or slipped): a fresh 100-cycle prior on the
+  // reference would hide every carrier row from the fault test.
   int ref = -1;
   for (int pass = 0; pass < 2 && ref < 0; ++pass) {
     for (int i = 0; i < n; ++i) {
-      if (pass == 0 && epoch.sats[i].slip) continue;
+      if (pass == 0 && restarted_[i]) continue;
       if (ref < 0 || epoch.sats[i].los_nav.z() > epoch.sats[ref].los_nav.z()) ref = i;
     }
   }
@@ -373,6 +377,9 @@ Status RtkBaseline::update(const RtkEpoch& epoch, RtkSolution& sol) {
       xi = x0 + kg * resid;
       used = true;
     }
+    // The final Jacobian needs |b| above the linearisation floor at the last
+    // iterate; otherwise the range is skipped for this epoch (the DD update stands).
+    if (used && !(xi.head<3>().norm() > kMinUwbBaseline_m)) used = false;
     if (used) {
       const RtkVec3 b = xi.head<3>();
       hrow.setZero();

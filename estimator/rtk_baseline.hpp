@@ -204,6 +204,7 @@ class RtkBaseline {
   uint32_t slot_seen_[kRtkMaxSats] = {};  // epoch counter at last use
   uint32_t epoch_count_ = 0;
   int epoch_slot_[kRtkMaxSats] = {};       // slot of each satellite of the current epoch
+  bool restarted_[kRtkMaxSats] = {};       // its ambiguity restarted this epoch (new or slipped)
   // Scratch.
   RtkRowVec h_, z_;
   RtkJacobian jac_;

@@ -38,6 +38,14 @@ TEST(EvalRtk, FilterSettingsAreTheFilterDefaultsNotTheSimulatorsNoise) {
   EXPECT_EQ(s.params.sigma_code_m, d.sigma_code_m);
   EXPECT_EQ(s.params.sigma_phase_m, d.sigma_phase_m);
   EXPECT_EQ(s.params.sigma_uwb_m, d.sigma_uwb_m);
+  // The baseline-walk PSD is the design value, the upper end of the family,
+  // not any run's drawn walk.
+  EXPECT_DOUBLE_EQ(s.relative_motion_psd_m2_s, 0.05 * 0.05);
+  for (uint64_t seed = 1; seed <= 99; ++seed) {
+    const sim::GnssRawConfig c = rtk_eval_sim_config(seed);
+    EXPECT_LE(c.relative_walk_m_sqrt_s * c.relative_walk_m_sqrt_s, s.relative_motion_psd_m2_s);
+    EXPECT_NE(c.sigma_code_m, s.params.sigma_code_m);
+  }
 }
 
 TEST(EvalRtk, SummaryCountsNeverFixedRunsAsInfiniteInTheMedian) {

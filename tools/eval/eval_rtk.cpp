@@ -41,11 +41,12 @@ RtkEvalSettings rtk_eval_settings() { return RtkEvalSettings{}; }
 
 RtkRunMetrics run_rtk_once(const std::vector<sim::GnssRawEpoch>& run, bool use_uwb, const RtkEvalSettings& s) {
   RtkRunMetrics m;
-  static thread_local RtkBaseline filter;  // ~70 KiB: not on the stack
+  static thread_local RtkBaseline filter;  // ~78 KiB: not on the stack
   if (!ok(filter.configure(s.params)) || run.empty()) return m;
   double t_prev = run.front().t_s;
   double canyon_end_s = -1.0;
   bool was_in_canyon = false;
+  bool fixed_last = false;  // the previous epoch was fixed
   for (const sim::GnssRawEpoch& ep : run) {
     ignore_status(filter.predict(ep.t_s - t_prev, s.relative_motion_psd_m2_s));
     t_prev = ep.t_s;
@@ -54,19 +55,24 @@ RtkRunMetrics run_rtk_once(const std::vector<sim::GnssRawEpoch>& run, bool use_u
       was_in_canyon = true;
       ++m.canyon_epochs;
     } else {
-      if (was_in_canyon && canyon_end_s < 0.0) canyon_end_s = ep.t_s;
+      if (was_in_canyon && canyon_end_s < 0.0) {
+        canyon_end_s = ep.t_s;
+        m.fixed_at_exit = fixed_last;
+      }
       ++m.open_epochs;
     }
+    fixed_last = false;
     const RtkEpoch obs = sim::to_rtk_epoch(ep, use_uwb);
     RtkSolution sol;
     if (!ok(filter.update(obs, sol)) || !sol.valid) continue;
     ++m.epochs;
     m.sq_err_float_m2 += (sol.b_float_nav_m - ep.baseline_nav_m).squaredNorm();
     if (!sol.fixed) continue;
+    fixed_last = true;
     ++m.fixed_epochs;
     ++(ep.in_canyon ? m.canyon_fixed : m.open_fixed);
     if (m.ttff_s < 0.0) m.ttff_s = ep.t_s - run.front().t_s;
-    if (canyon_end_s >= 0.0 && m.refix_s < 0.0) m.refix_s = ep.t_s - canyon_end_s;
+    if (canyon_end_s >= 0.0 && !m.fixed_at_exit && m.refix_s < 0.0) m.refix_s = ep.t_s - canyon_end_s;
     const double e2 = (sol.b_fixed_nav_m - ep.baseline_nav_m).squaredNorm();
     m.sq_err_fixed_m2 += e2;
     bool wrong = false;
@@ -131,7 +137,9 @@ RtkSummary summarise_rtk(const std::string& name, const std::vector<RtkRunMetric
       ttff.push_back(m.ttff_s);
       r.ttff_max_s = std::isnan(r.ttff_max_s) ? m.ttff_s : std::max(r.ttff_max_s, m.ttff_s);
     }
-    if (m.has_canyon) {
+    if (m.has_canyon && m.fixed_at_exit) ++r.held_at_exit;
+    if (m.has_canyon && !m.fixed_at_exit) {
+      ++r.lost_at_exit;
       refix.push_back(m.refix_s < 0.0 ? inf : m.refix_s);
       if (m.refix_s < 0.0) ++r.never_refixed;
     }
@@ -154,9 +162,10 @@ void print_rtk_table(std::FILE* f, const std::vector<RtkSummary>& rows, bool mar
   if (markdown) {
     std::fprintf(f,
                  "| method | runs | fix rate, open sky | wrong fixes, open sky | fix rate, canyon | wrong fixes, canyon "
-                 "| TTFF median [s] | TTFF max [s] | never fixed | re-fix after canyon, median [s] | never re-fixed "
+                 "| TTFF median [s] | TTFF max [s] | never fixed | fix held at canyon exit | re-fix after canyon, median [s] "
+                 "| never re-fixed "
                  "| correct-fix RMSE [m] | float RMSE [m] |\n");
-    std::fprintf(f, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+    std::fprintf(f, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     // A figure that does not exist (no canyon, nothing fixed) prints as "–".
     auto cell = [](double v, int decimals, const char* unit) {
       char buf[32];
@@ -165,24 +174,26 @@ void print_rtk_table(std::FILE* f, const std::vector<RtkSummary>& rows, bool mar
       return std::string(buf) + unit;
     };
     for (const RtkSummary& r : rows) {
-      std::fprintf(f, "| %s | %d | %s | %s | %s | %s | %s | %s | %d | %s | %s | %s | %s |\n", r.name.c_str(), r.runs,
+      char held[32] = "–";
+      if (r.held_at_exit + r.lost_at_exit > 0) std::snprintf(held, sizeof held, "%d of %d", r.held_at_exit, r.held_at_exit + r.lost_at_exit);
+      std::fprintf(f, "| %s | %d | %s | %s | %s | %s | %s | %s | %d | %s | %s | %s | %s | %s |\n", r.name.c_str(), r.runs,
                    cell(100.0 * r.open_fix_rate, 1, " %").c_str(),
                    cell(100.0 * r.open_wrong_rate, 2, " %").c_str(),
                    cell(100.0 * r.canyon_fix_rate, 1, " %").c_str(),
                    cell(100.0 * r.canyon_wrong_rate, 2, " %").c_str(), cell(r.ttff_median_s, 1, "").c_str(),
-                   cell(r.ttff_max_s, 1, "").c_str(), r.never_fixed, cell(r.refix_median_s, 1, "").c_str(),
+                   cell(r.ttff_max_s, 1, "").c_str(), r.never_fixed, held, cell(r.refix_median_s, 1, "").c_str(),
                    std::isnan(r.refix_median_s) ? "–" : std::to_string(r.never_refixed).c_str(),
                    cell(r.correct_rmse_m, 4, "").c_str(), cell(r.float_rmse_m, 3, "").c_str());
     }
     return;
   }
-  std::fprintf(f, "%-8s %5s %9s %8s %9s %8s %8s %8s %6s %8s %6s %10s %9s\n", "method", "runs", "fix open", "wrong",
-               "fix cany", "wrong", "TTFF med", "TTFF max", "never", "refix md", "never", "corr RMSE", "float");
+  std::fprintf(f, "%-8s %5s %9s %8s %9s %8s %8s %8s %6s %6s %8s %6s %10s %9s\n", "method", "runs", "fix open", "wrong",
+               "fix cany", "wrong", "TTFF med", "TTFF max", "never", "held", "refix md", "never", "corr RMSE", "float");
   for (const RtkSummary& r : rows) {
-    std::fprintf(f, "%-8s %5d %8.1f%% %7.2f%% %8.1f%% %7.2f%% %8.1f %8.1f %6d %8.1f %6d %10.4f %9.3f\n",
+    std::fprintf(f, "%-8s %5d %8.1f%% %7.2f%% %8.1f%% %7.2f%% %8.1f %8.1f %6d %6d %8.1f %6d %10.4f %9.3f\n",
                  r.name.c_str(), r.runs, 100.0 * r.open_fix_rate, 100.0 * r.open_wrong_rate,
                  100.0 * r.canyon_fix_rate, 100.0 * r.canyon_wrong_rate, r.ttff_median_s, r.ttff_max_s,
-                 r.never_fixed, r.refix_median_s, r.never_refixed, r.correct_rmse_m, r.float_rmse_m);
+                 r.never_fixed, r.held_at_exit, r.refix_median_s, r.never_refixed, r.correct_rmse_m, r.float_rmse_m);
   }
 }
 

@@ -25,7 +25,8 @@ struct RtkRunMetrics {
   int open_epochs = 0, open_fixed = 0, open_wrong = 0;
   int canyon_epochs = 0, canyon_fixed = 0, canyon_wrong = 0;
   double ttff_s = -1.0;        // time of the first fixed epoch since the start [s], -1: never fixed
-  double refix_s = -1.0;       // first fixed epoch after the canyon, since its end [s]; -1: never / no canyon
+  bool fixed_at_exit = false;  // the last canyon epoch was fixed (the fix held through the canyon's end)
+  double refix_s = -1.0;       // not fixed at the exit: first fixed epoch after the canyon, since its end [s]; -1: never / n.a.
   bool has_canyon = false;
   double sq_err_fixed_m2 = 0.0;    // sum of |b_fix - b_true|^2 over fixed epochs
   double sq_err_correct_m2 = 0.0;  // same over the correctly fixed epochs
@@ -60,8 +61,10 @@ struct RtkSummary {
   double ttff_median_s = 0.0;     // over all runs, never-fixed runs counted as +inf (inf if half never fixed)
   double ttff_max_s = 0.0;        // over runs that fixed
   int never_fixed = 0;
-  double refix_median_s = 0.0;    // after the canyon, over runs with a canyon, never re-fixed = +inf
-  int never_refixed = 0;
+  int held_at_exit = 0;           // runs fixed at the canyon's last epoch
+  int lost_at_exit = 0;           // runs with a canyon not fixed at its last epoch
+  double refix_median_s = 0.0;    // over lost_at_exit runs: time from the canyon's end to a fix, never = +inf
+  int never_refixed = 0;          // lost_at_exit runs never fixed again
   double fixed_rmse_m = 0.0;      // 3-D baseline error of the fixed epochs (wrong fixes included)
   double correct_rmse_m = 0.0;    // 3-D baseline error of the correctly fixed epochs
   double float_rmse_m = 0.0;      // 3-D baseline error of the float solution, all valid epochs

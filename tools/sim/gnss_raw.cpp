@@ -40,8 +40,9 @@ std::vector<GnssRawEpoch> simulate_gnss_raw(const GnssRawConfig& c) {
     amb_b[static_cast<size_t>(i)] = amb_dist(rng);
   }
   const double len0 = c.baseline_min_m + (c.baseline_max_m - c.baseline_min_m) * u01(rng);
-  const double dir0 = 2.0 * kPi * u01(rng);
-  Eigen::Vector3d b(len0 * std::cos(dir0), len0 * std::sin(dir0), 0.3 * (2.0 * u01(rng) - 1.0));
+  const double lateral0 = std::min(c.baseline_lateral_max_m, len0) * (2.0 * u01(rng) - 1.0);
+  const double along0 = (u01(rng) < 0.5 ? -1.0 : 1.0) * std::sqrt(std::max(0.0, len0 * len0 - lateral0 * lateral0));
+  Eigen::Vector3d b(along0, lateral0, 0.3 * (2.0 * u01(rng) - 1.0));
   double clk_a = 3e5 * (2.0 * u01(rng) - 1.0);
   double clk_b = 3e5 * (2.0 * u01(rng) - 1.0);
 

@@ -24,6 +24,9 @@ struct GnssRawConfig {
   double sigma_phase_m = 0.003;          // undifferenced carrier noise at zenith, / sin(el) [m]
   double slip_rate_hz = 0.0;             // cycle slips per satellite and receiver per second
   double baseline_min_m = 5.0, baseline_max_m = 20.0;  // initial |b|
+  // Convoy geometry: B drives ahead of or behind A in the same street (along
+  // x), offset sideways by at most this [m] (within a lane or two).
+  double baseline_lateral_max_m = 3.0;
   double relative_walk_m_sqrt_s = 0.03;  // baseline random walk per horizontal axis [m/sqrt(s)] (vertical: 1/5)
   double speed_m_s = 5.0;                // vehicle A drives along x (seed 002: about 5 m/s)
   double sigma_uwb_m = 0.07;             // UWB range noise [m]
