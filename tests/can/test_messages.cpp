@@ -497,10 +497,11 @@ TEST(CanGnss, FixesRoundTripWithinTheQuantisationAndNotReportedStaysNotReported)
     EXPECT_EQ(g.rx_t_us, now);
     EXPECT_EQ(g.fix, f.fix);
     EXPECT_EQ(g.num_sv, f.num_sv);
-    // 1 mm steps (half a step plus the float's own spacing at 2000 km).
+    // 1 mm steps: half a step plus the float's own spacing (about 0.25 m at
+    // 2000 km, 1 mm at 10 km up).
     EXPECT_NEAR(g.pos_nav_m.x, f.pos_nav_m.x, 0.0005F + std::fabs(f.pos_nav_m.x) * 0x1p-23F);
     EXPECT_NEAR(g.pos_nav_m.y, f.pos_nav_m.y, 0.0005F + std::fabs(f.pos_nav_m.y) * 0x1p-23F);
-    EXPECT_NEAR(g.pos_nav_m.z, f.pos_nav_m.z, 0.0005F + 1e-6F);
+    EXPECT_NEAR(g.pos_nav_m.z, f.pos_nav_m.z, 0.0005F + std::fabs(f.pos_nav_m.z) * 0x1p-23F);
     for (int a = 0; a < 3; ++a) {
       const float want = a == 0 ? f.vel_nav_mps.x : (a == 1 ? f.vel_nav_mps.y : f.vel_nav_mps.z);
       const float got = a == 0 ? g.vel_nav_mps.x : (a == 1 ? g.vel_nav_mps.y : g.vel_nav_mps.z);
