@@ -7,7 +7,9 @@
 # cycle-latency histogram, overruns and CAN log counters.
 # usage: scripts/rt_stress.sh [DURATION_S] [BUILD_DIR]     (not run in CI: it takes DURATION_S)
 # environment: RT_STRESS_LOAD="dd hog" (default; any of dd, hog, or empty for an idle machine),
-#              RT_STRESS_ARGS="..." extra firmware options (e.g. --no-rt to compare)
+#              RT_STRESS_ARGS="..." extra firmware options (e.g. --no-rt to compare, --cpu N
+#              for the loop thread alone on CPU N), RT_STRESS_WRAP="..." a command in front
+#              of the firmware (e.g. taskset -c 0: every thread on CPU 0)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 duration="${1:-600}"
@@ -47,8 +49,8 @@ feed() {
 feed | ${RT_STRESS_WRAP:-} "$uwbnav" firmware --recording "$work/rec" --console stdio --duration "$duration" \
   --can-log "$work/can.log" ${RT_STRESS_ARGS:-} | cat > "$work/console.log" || true
 
-grep -a -E '^firmware: (real time|note)' "$work/console.log" || true
-grep -a -o -E '(firmware: stopped.*|^  (loop|latency|rt|CAN log|CAN tx) .*)' "$work/console.log" || {
+grep -a -E '^firmware: (real time|note|loop thread)' "$work/console.log" || true
+grep -a -o -E '(firmware: stopped.*|^  (loop|latency|rt|cpu|CAN log|CAN tx) .*)' "$work/console.log" || {
   echo "rt_stress: no summary from the firmware; console log tail:" >&2
   tail -20 "$work/console.log" >&2
   exit 1

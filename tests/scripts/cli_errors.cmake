@@ -107,6 +107,17 @@ maneuver = turn 90 3
     "-DARGS=eval|family|--param|gate.policy=3.5" -DRC=2
     "-DERR=^uwbnav eval family: param: gate.policy=3.5 is not a whole number \\(enum parameter\\)\n$")
 
+  # --cpu: the loop thread pinned to one CPU, or refused naming the CPUs there are.
+  cli_check(cli_firmware_cpu_outside_the_allowed_set_refused
+    "-DARGS=firmware|--recording|${cli_dir}/rec|--console|none|--duration|0.5|--cpu|1000" -DRC=2
+    "-DERR=^uwbnav firmware: --cpu 1000: not one of the CPUs this process may use \\([0-9,-]+\\)\n$")
+  cli_check(cli_firmware_cpu_not_a_number_is_a_usage_error
+    "-DARGS=firmware|--recording|${cli_dir}/rec|--console|none|--duration|0.5|--cpu|x" -DRC=2
+    "-DERR=usage: uwbnav firmware")
+  cli_check(cli_firmware_cpu_0_pins_the_loop_thread
+    "-DARGS=firmware|--recording|${cli_dir}/rec|--console|none|--duration|0.5|--no-rt|--cpu|0" -DRC=0
+    "-DOUT=firmware: loop thread pinned to CPU 0\n.*  cpu      loop thread pinned to CPU 0\n")
+
   # stdio console: end of input ends the session cleanly, after the replies went out.
   file(WRITE ${cli_dir}/console_input.txt "status\nparam list -c\nparam set uwb.sigma 0.2\nparam list -c\n")
   cli_check(cli_firmware_stdio_console_ends_the_session_at_end_of_input

@@ -145,6 +145,34 @@ RtSetup setup_realtime(int priority) {
   return rt;
 }
 
+// Pins the calling (loop) thread to `cpu`; the CAN-log writer and console I/O
+// threads, started before, keep every CPU. Returns false, with the reason in
+// `note`, when the kernel refuses.
+bool pin_loop_thread(int cpu, std::string& note) {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  CPU_SET(cpu, &set);
+  const int rc = ::pthread_setaffinity_np(::pthread_self(), sizeof set, &set);
+  if (rc == 0) return true;
+  note = "loop thread not pinned to CPU " + std::to_string(cpu) + " (" + std::strerror(rc) + ")";
+  return false;
+}
+
+// The CPUs this process may run on, as "0-1" or "0,2,5" ("?" when unknown).
+std::string allowed_cpus_text(const cpu_set_t& set) {
+  std::string out;
+  for (int c = 0; c < CPU_SETSIZE; ++c) {
+    if (!CPU_ISSET(c, &set)) continue;
+    int last = c;
+    while (last + 1 < CPU_SETSIZE && CPU_ISSET(last + 1, &set)) ++last;
+    if (!out.empty()) out += ",";
+    out += std::to_string(c);
+    if (last > c) out += "-" + std::to_string(last);
+    c = last;
+  }
+  return out.empty() ? "?" : out;
+}
+
 void print_histogram(const LoopStats& l) {
   std::printf("  latency  deadline to end of work: max %u us; cycles per bin:", l.latency_max_us);
   for (uint32_t i = 0; i < kNumLatencyBins; ++i) {
@@ -199,6 +227,7 @@ struct RunSummary {
   hal::AsyncLogCounters log;
   RtSetup rt;
   bool rt_requested = true;
+  int loop_cpu = -1;  // CPU the loop thread is pinned to (--cpu), -1 none
 };
 
 void print_summary(const RunSummary& s) {
@@ -214,6 +243,7 @@ void print_summary(const RunSummary& s) {
   } else {
     std::printf("  rt       off (--no-rt): SCHED_OTHER, memory not locked\n");
   }
+  if (s.loop_cpu >= 0) std::printf("  cpu      loop thread pinned to CPU %d\n", s.loop_cpu);
   if (s.logged) {
     std::printf("  CAN log  written %llu  overflow %llu  write errors %llu  queue high-water %zu of %zu frames\n",
                 static_cast<unsigned long long>(s.log.written), static_cast<unsigned long long>(s.log.overflow),
@@ -244,19 +274,21 @@ int cmd_firmware(int argc, char** argv) {
   Args args(argc, argv, {"--no-rt"});
   const std::vector<std::string> known = {"--recording", "--can-link", "--can-if", "--console", "--params",
                                           "--can-log",   "--duration", "--site",   "--param",
-                                          "--cal",       "--rt-priority", "--no-rt"};
+                                          "--cal",       "--rt-priority", "--no-rt", "--cpu"};
   const std::string console = args.get("--console", "stdio");
   const char* usage =
       "usage: uwbnav firmware [--recording DIR | --can-link PATH | --can-if NAME] [--site DIR]\n"
       "                       [--console stdio|pty|none] [--params FILE] [--can-log FILE] [--duration S]\n"
-      "                       [--param name=value]... [--cal FILE] [--rt-priority 1..99 | --no-rt]\n"
+      "                       [--param name=value]... [--cal FILE] [--rt-priority 1..99 | --no-rt] [--cpu N]\n"
       "  sensors: --recording DIR replays DIR in real time; without it a HIL rig sends them over CAN\n"
       "  (can.hil_rx_enable = 1) and --site DIR (a recording) gives the anchors and tags\n"
       "  --cal FILE: site range calibration loaded at start (uwbnav calibrate, docs/commissioning.md)\n"
       "  exit status: 0 done, 1 input or start-up failure, 2 usage or parameter error,\n"
       "  3 the recording's IMU or UWB stream ended early (replayed anyway)\n"
       "  real time (docs/realtime.md): memory locked and the loop at SCHED_FIFO --rt-priority (default 80)\n"
-      "  when permitted, with a note when not; --no-rt runs without either\n";
+      "  when permitted, with a note when not; --no-rt runs without either\n"
+      "  --cpu N: the loop thread on CPU N only (one without block-device interrupts, /proc/interrupts);\n"
+      "  the CAN-log and console I/O threads keep every CPU\n";
   double duration_s = 0.0;
   if (args.has("--duration")) {
     const std::string text = args.get("--duration");  // keep alive: `end` points into it
@@ -266,12 +298,23 @@ int cmd_firmware(int argc, char** argv) {
   }
   uint64_t rt_priority = 80;
   const bool bad_priority = !args.get_u64("--rt-priority", 80, &rt_priority) || rt_priority < 1 || rt_priority > 99;
+  uint64_t loop_cpu = 0;
+  const bool bad_cpu = !args.get_u64("--cpu", 0, &loop_cpu) || loop_cpu >= CPU_SETSIZE;
   if (!args.error().empty() || !args.positional().empty() || !args.unknown(known).empty() || duration_s < 0.0 ||
-      bad_priority || (args.has("--no-rt") && args.has("--rt-priority")) ||
+      bad_priority || bad_cpu || (args.has("--no-rt") && args.has("--rt-priority")) ||
       (console != "stdio" && console != "pty" && console != "none") ||
       (args.has("--can-link") && args.has("--can-if"))) {
     std::fprintf(stderr, "%s", usage);
     return 2;
+  }
+  if (args.has("--cpu")) {
+    cpu_set_t allowed;
+    CPU_ZERO(&allowed);
+    if (::sched_getaffinity(0, sizeof allowed, &allowed) == 0 && !CPU_ISSET(static_cast<int>(loop_cpu), &allowed)) {
+      std::fprintf(stderr, "uwbnav firmware: --cpu %llu: not one of the CPUs this process may use (%s)\n",
+                   static_cast<unsigned long long>(loop_cpu), allowed_cpus_text(allowed).c_str());
+      return 2;
+    }
   }
   const bool replay = args.has("--recording");
   const bool link = args.has("--can-link");
@@ -432,6 +475,16 @@ int cmd_firmware(int argc, char** argv) {
                   summary.rt.fifo ? ("SCHED_FIFO priority " + std::to_string(summary.rt.priority)).c_str()
                                   : "SCHED_OTHER");
       if (!summary.rt.note.empty()) std::printf("firmware: note: %s\n", summary.rt.note.c_str());
+      std::fflush(stdout);
+    }
+    if (args.has("--cpu")) {
+      std::string note;
+      if (pin_loop_thread(static_cast<int>(loop_cpu), note)) {
+        summary.loop_cpu = static_cast<int>(loop_cpu);
+        std::printf("firmware: loop thread pinned to CPU %d\n", summary.loop_cpu);
+      } else {
+        std::printf("firmware: note: %s\n", note.c_str());
+      }
       std::fflush(stdout);
     }
     RealtimeLoop loop(*app, clock);
