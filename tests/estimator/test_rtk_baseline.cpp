@@ -571,6 +571,47 @@ TEST(RtkBaselineInput, BadParametersAndTimeStepsAreRefused) {
   EXPECT_EQ(f.predict(1.0, 0.0), Status::kOk);
 }
 
+TEST(RtkBaselineInput, AnUpdateThatFailsLateRestoresStateCovarianceAndSlotsLikeATwinThatNeverSawIt) {
+  // The epoch passes check() (finite numbers) and brings a new satellite, which
+  // takes a slot and restarts its ambiguity before the DD update overflows
+  // (kNotFinite): the late restore path. A twin filter that never saw the epoch
+  // must then run bit for bit the same, the new satellite new to both.
+  static RtkBaseline a;
+  static RtkBaseline twin;
+  ASSERT_EQ(a.configure(RtkParams{}), Status::kOk);
+  ASSERT_EQ(twin.configure(RtkParams{}), Status::kOk);
+  const RtkVec3 base(5.0, 5.0, 0.0);
+  const RtkEpoch good = hand_epoch(base, sky7(), {1, 2, 3, 4, 5, 6, 7}, 0.0, kBdsB1Wavelength_m);
+  RtkSolution sa;
+  RtkSolution st;
+  ASSERT_EQ(a.update(good, sa), Status::kOk);
+  ASSERT_EQ(twin.update(good, st), Status::kOk);
+  RtkEpoch bad = good;
+  bad.sats[6].sat_id = 99;        // new: takes a slot before the failure
+  bad.sats[2].code_sd_m = 1e300;  // finite, passes check(); the update overflows
+  const RtkStateVec x0 = a.state();
+  const RtkStateMat p0 = a.covariance();
+  sa.valid = true;
+  EXPECT_EQ(a.update(bad, sa), Status::kNotFinite);
+  EXPECT_FALSE(sa.valid);
+  EXPECT_EQ(a.state(), x0);
+  EXPECT_EQ(a.covariance(), p0);
+  RtkEpoch next = hand_epoch(base, sky7(), {1, 2, 3, 4, 5, 6, 9}, 0.0, kBdsB1Wavelength_m);
+  next.sats[6].sat_id = 99;
+  for (int k = 0; k < 5; ++k) {
+    ASSERT_EQ(a.predict(1.0, 0.0), Status::kOk);
+    ASSERT_EQ(twin.predict(1.0, 0.0), Status::kOk);
+    ASSERT_EQ(a.update(next, sa), Status::kOk) << "epoch " << k;
+    ASSERT_EQ(twin.update(next, st), Status::kOk) << "epoch " << k;
+    EXPECT_EQ(a.state(), twin.state()) << "epoch " << k;
+    EXPECT_EQ(a.covariance(), twin.covariance()) << "epoch " << k;
+    EXPECT_EQ(sa.valid, st.valid) << "epoch " << k;
+    EXPECT_EQ(sa.fixed, st.fixed) << "epoch " << k;
+    EXPECT_EQ(sa.ref_sat_id, st.ref_sat_id) << "epoch " << k;
+  }
+  EXPECT_TRUE(sa.valid);
+}
+
 TEST(RtkBaselineMemory, FixedSizeStorageOnly) {
   // Static memory: every matrix is fixed-size Eigen (no Dynamic dimension),
   // so the object is self-contained; the estimator library is compiled with
