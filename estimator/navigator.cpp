@@ -119,6 +119,11 @@ Status Navigator::configure(const SiteConfig& site, const Params& params) {
     }
   }
   params_ = params;
+  // A new site or IMU: the bias instability is learned again from the parameters.
+  gyro_rw_var_gain_ = Real(1);
+  accel_rw_var_gain_ = Real(1);
+  gyro_corr_ratio_ = accel_corr_ratio_ = Real(1);
+  bias_win_.close();
   update_params(params);
   const Status gs = gating_.configure(site_, params_);
   // Anchor layout: height spread decides the 2-D fix and the automatic height constraint.
@@ -163,6 +168,7 @@ void Navigator::update_params(const Params& params) {
   c.imu.accel_bias_rw = static_cast<Real>(params[ParamId::kImuAccelBiasRw]);
   c.gyro_bias_init = static_cast<Real>(params[ParamId::kImuGyroBiasInit]);
   c.accel_bias_init = static_cast<Real>(params[ParamId::kImuAccelBiasInit]);
+  c.bias_rw_max_gain = static_cast<Real>(params[ParamId::kImuBiasRwMaxGain]);
   const Real sigma_prior = static_cast<Real>(params[ParamId::kUwbSigma]);
   c.uwb_sigma_min_m = static_cast<Real>(params[ParamId::kUwbSigmaMin]);
   c.uwb_sigma_max_m = std::fmax(static_cast<Real>(params[ParamId::kUwbSigmaMax]), c.uwb_sigma_min_m);
@@ -238,6 +244,7 @@ void Navigator::update_params(const Params& params) {
   bridge_.configure(c.rbf_mode);
 #endif
   imu_eff_ = c.imu;
+  apply_bias_rw_gains();
   rest_.configure(static_cast<Real>(params[ParamId::kEkfRestWindow]), static_cast<Real>(params[ParamId::kEkfRestAccelStd]),
                   static_cast<Real>(params[ParamId::kEkfRestGyroMax]));
   if (configured_) gating_.update_params(params);
@@ -343,6 +350,54 @@ bool Navigator::imu_alive(uint64_t t_us) const {
   return diag_.imu_samples > 0 && diff_us(t_us, diag_.last_imu_t_us) <= static_cast<int64_t>(cfg_.imu_timeout_us);
 }
 
+void Navigator::apply_bias_rw_gains() {
+  const Real max_var_gain = cfg_.bias_rw_max_gain * cfg_.bias_rw_max_gain;
+  gyro_rw_var_gain_ = std::fmin(std::fmax(gyro_rw_var_gain_, Real(1)), max_var_gain);
+  accel_rw_var_gain_ = std::fmin(std::fmax(accel_rw_var_gain_, Real(1)), max_var_gain);
+  const Real gyro_gain = std::sqrt(gyro_rw_var_gain_);
+  const Real accel_gain = std::sqrt(accel_rw_var_gain_);
+  imu_eff_.gyro_bias_rw = cfg_.imu.gyro_bias_rw * gyro_gain;
+  imu_eff_.accel_bias_rw = cfg_.imu.accel_bias_rw * accel_gain;
+  diag_.gyro_bias_rw_gain = static_cast<float>(gyro_gain);
+  diag_.accel_bias_rw_gain = static_cast<float>(accel_gain);
+}
+
+void Navigator::learn_bias_instability(Real dt_s) {
+  // Covariance matching (Mehra 1972) on the bias states, one window at a time
+  // (BiasWindow): the window's summed corrections against the variance the
+  // model gave them, ratio 1 when the bias walks as imu.*_bias_rw says. A bias
+  // that wanders faster leaves corrections that add up: the ratio exceeds 1.
+  // The windows' ratio, averaged with forgetting, moves the random-walk
+  // variance gain by its fourth root per window (damped: the gain changes the
+  // variance it is compared with), between 1 (the parameters are the floor:
+  // a data-sheet figure) and imu.bias_rw_max_gain^2.
+  if (!(cfg_.bias_rw_max_gain > Real(1))) return;
+  const NominalState& x = ekf_.state();
+  const ErrCov& p = ekf_.cov();
+  if (!bias_win_.is_open()) {
+    bias_win_.open(x, p);
+    return;
+  }
+  bias_win_.predicted(dt_s);
+  // 5 s of IMU filter per window (tuning seeds 1-20: 10 and 20 s learn too
+  // slowly to matter within a drive; docs/ekf.md).
+  constexpr Real kWindow_s = Real(5);
+  if (bias_win_.predicted_s() < kWindow_s) return;
+  constexpr Real kForget = Real(0.7);    // weight of the previous windows' mean ratio
+  constexpr Real kRatioMax = Real(100);  // one axis' ratio in one window at most
+  const auto learn = [](Real ratio, Real& ratio_avg, Real& var_gain) {
+    if (ratio < Real(0)) return;  // no axis updated in the window
+    ratio_avg = kForget * ratio_avg + (Real(1) - kForget) * ratio;
+    var_gain *= std::sqrt(std::sqrt(ratio_avg));
+  };
+  learn(bias_win_.ratio(BiasWindow::kGyro, x, p, imu_eff_.gyro_bias_rw, kRatioMax), gyro_corr_ratio_,
+        gyro_rw_var_gain_);
+  learn(bias_win_.ratio(BiasWindow::kAccel, x, p, imu_eff_.accel_bias_rw, kRatioMax), accel_corr_ratio_,
+        accel_rw_var_gain_);
+  apply_bias_rw_gains();
+  bias_win_.open(x, p);
+}
+
 void Navigator::track_imu_noise(const Vec3& accel_body_mps2, const Vec3& gyro_body_radps, Real dt_s) {
   // Second difference f_k - 2 f_k-1 + f_k-2: smooth motion cancels, white noise
   // of per-sample variance s2 gives variance 6 s2; its density^2 is s2 dt.
@@ -398,7 +453,10 @@ Status Navigator::on_imu(const ImuSample& imu) {
     t_state_us_ = imu.t_us;
     apply_constraints(imu.t_us);
     check_health();
-    if (phase_ == Phase::kRunning && !cv_mode_) bridge_outage(imu.t_us, f_mean, w_mean, dt);
+    if (phase_ == Phase::kRunning && !cv_mode_) {
+      bridge_outage(imu.t_us, f_mean, w_mean, dt);
+      learn_bias_instability(dt);
+    }
   }
   prev_imu_ = imu;
   have_prev_imu_ = true;
@@ -529,6 +587,7 @@ void Navigator::enter_cv_mode(NavMode reason) {
   // on in the ranges-only model; tilt is levelled, IMU biases are dropped.
   cv_mode_ = true;
   cv_reason_ = reason;
+  bias_win_.close();  // the learning window closes with the IMU filter
   cv_yaw_known_ = true;
   ErrVec sigma = ErrVec::Zero();
   const Real yaw_sigma = std::sqrt(ekf_.cov()(ErrIdx::kAtt + 2, ErrIdx::kAtt + 2));

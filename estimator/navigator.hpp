@@ -5,6 +5,7 @@
 
 #include <cstdint>
 
+#include "estimator/bias_window.hpp"
 #include "estimator/ekf_core.hpp"
 #include "estimator/gating.hpp"
 #include "estimator/ls_taylor.hpp"
@@ -42,6 +43,8 @@ struct NavDiagnostics {
   uint64_t last_imu_t_us = 0;
   uint64_t last_range_used_t_us = 0;
   float uwb_sigma_m = 0.0F;      // learned LOS ranging 1-sigma [m]
+  float gyro_bias_rw_gain = 1.0F;   // learned gain on imu.gyro_bias_rw (1-sigma ratio, >= 1) [-]
+  float accel_bias_rw_gain = 1.0F;  // learned gain on imu.accel_bias_rw (1-sigma ratio, >= 1) [-]
   RbfBridgeDiag rbf;             // outage bridging (ekf.rbf_bridge): training, predictions, fusions
 #if UWBNAV_GNSS
   uint32_t gnss_received = 0;    // fixes handed to on_gnss
@@ -138,6 +141,7 @@ class Navigator {
   // Parameter values in the estimator's types (refreshed by update_params).
   struct Config {
     ImuNoise imu;
+    Real bias_rw_max_gain = Real(4);       // [-] ceiling of the learned bias random-walk gain (1: off)
     Real gyro_bias_init = Real(8.7e-3);
     Real accel_bias_init = Real(0.15);
     Real uwb_sigma_m = Real(0.1);
@@ -279,6 +283,11 @@ class Navigator {
     Real level_sigma_rad = Real(0);  // ground, no IMU: tilt prior about level [rad], 0: none
   };
   CvModel cv_model(uint64_t t_us) const;
+  // Covariance matching of the IMU-bias corrections over a window; scales the
+  // bias random walks the IMU filter uses (called after each IMU prediction of dt_s).
+  void learn_bias_instability(Real dt_s);
+  // Applies the learned gains to imu_eff_ (after the parameters change).
+  void apply_bias_rw_gains();
   void track_imu_noise(const Vec3& accel_body_mps2, const Vec3& gyro_body_radps, Real dt_s);
   void enter_cv_mode(NavMode reason);
   void bridge_outage(uint64_t t_us, const Vec3& accel_mean_body_mps2, const Vec3& gyro_mean_body_radps, Real dt_s);
@@ -361,6 +370,13 @@ class Navigator {
   Real accel_d2_ms_ = Real(0);       // EMA of the squared second difference, mean over axes [(m/s^2)^2]
   Real gyro_d2_ms_ = Real(0);        // same for the gyro [(rad/s)^2]
   ImuNoise imu_eff_;                 // densities used: max(parameter, measured floor)
+  // Bias instability learned on line (docs/ekf.md "Learned bias instability"):
+  // variance gains on the bias random walks, in [1, bias_rw_max_gain^2].
+  Real gyro_rw_var_gain_ = Real(1);
+  Real accel_rw_var_gain_ = Real(1);
+  Real gyro_corr_ratio_ = Real(1);    // windows' mean (squared correction sum / model variance), forgetting [-]
+  Real accel_corr_ratio_ = Real(1);   // the same for the accelerometer bias [-]
+  BiasWindow bias_win_;               // the learning window (open while the IMU filter runs)
   Vec3 last_gyro_body_radps_ = Vec3::Zero();
 
   // Initialisation / alignment state.

@@ -65,6 +65,7 @@ void Navigator::restart(bool counted_reset) {
     after_failure_ = true;
   }
   phase_ = Phase::kWaitFix;
+  bias_win_.close();
 #if UWBNAV_GNSS
   gnss_prev_fused_us_ = 0;
 #endif

@@ -254,6 +254,11 @@ bool Console::step_stats(size_t step) {
       add(" imu_samples=%lu ranges_received=%lu ranges_used=%lu ranges_rejected=%lu", ul(dg.imu_samples),
           ul(dg.ranges_received), ul(dg.ranges_used), ul(dg.ranges_rejected));
       add_reset_fields(dg);
+      // What the estimator learned on line (docs/ekf.md): the LOS ranging
+      // 1-sigma and the gains on the gyro and accelerometer bias random walks.
+      add_fixed(" uwb_sigma_m=", dg.uwb_sigma_m, 3);
+      const float rw_gain[2] = {dg.gyro_bias_rw_gain, dg.accel_bias_rw_gain};
+      add_fixed(" bias_rw_gain=", rw_gain, 2, 2);
       break;
     }
 #if UWBNAV_GNSS

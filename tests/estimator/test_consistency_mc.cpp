@@ -12,6 +12,7 @@
 #include <random>
 #include <vector>
 
+#include "estimator/bias_window.hpp"
 #include "estimator/ekf_core.hpp"
 #include "error_injection.hpp"
 #include "estimator/mm_height.hpp"
@@ -398,6 +399,70 @@ TEST(ConsistencyMc, ConstraintUpdatesKeepTheCoreConsistent) {
   }
   // THEN position, velocity and attitude stay chi-square consistent
   expect_chi2_mean(sum / kRuns, 9, kRuns, "NHC + height updates");
+}
+
+// Mean over windows of BiasWindow::ratio (the Navigator's bias-instability
+// statistic: (sum of one window's gyro-bias corrections)^2 over the variance
+// the model gave them, mean over the axes) for a gyro bias that walks with
+// density sqrt(q_true_scale) * kQModel while the filter models kQModel; the
+// bias is measured directly, with white noise.
+double bias_correction_ratio(double q_true_scale, uint64_t seed) {
+  constexpr double kQModel = 1e-5;  // [rad/s^2/sqrt(Hz)], imu.gyro_bias_rw's default
+  constexpr double kDt = 0.01;      // [s] propagation step
+  constexpr int kStepsPerMeas = 10;  // a measurement of each axis at 10 Hz
+  constexpr double kMeasSigma = 2e-4;  // [rad/s]
+  constexpr int kStepsPerWindow = 500;  // 5 s, the Navigator's window
+  constexpr int kWarmupWindows = 20;
+  constexpr int kWindows = 300;
+  Rng rng(seed);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  EkfCore ekf;
+  ErrVec sigma = ErrVec::Constant(Real(1e-3));
+  ekf.init(NominalState{}, sigma);
+  BiasWindow win;
+  double truth[3] = {0, 0, 0};
+  const double walk = kQModel * std::sqrt(q_true_scale * kDt);
+  double ratio_sum = 0.0;
+  int ratio_n = 0;
+  for (int w = 0; w < kWarmupWindows + kWindows; ++w) {
+    win.open(ekf.state(), ekf.cov());
+    for (int k = 0; k < kStepsPerWindow; ++k) {
+      for (int i = 0; i < 3; ++i) {
+        truth[i] += walk * n01(rng);
+        ekf.add_variance(ErrIdx::kBg + i, static_cast<Real>(kQModel * kQModel * kDt));
+      }
+      win.predicted(static_cast<Real>(kDt));
+      if (k % kStepsPerMeas != 0) continue;
+      for (int i = 0; i < 3; ++i) {
+        ScalarObs obs;
+        obs.h(ErrIdx::kBg + i) = Real(1);
+        obs.innovation = static_cast<Real>(truth[i] + kMeasSigma * n01(rng) -
+                                           static_cast<double>(ekf.state().bg_body_radps(i)));
+        obs.r_var = static_cast<Real>(kMeasSigma * kMeasSigma);
+        EXPECT_TRUE(ekf.update(obs).applied);
+      }
+    }
+    const Real r = win.ratio(BiasWindow::kGyro, ekf.state(), ekf.cov(), static_cast<Real>(kQModel), Real(1e6));
+    EXPECT_GE(r, Real(0));  // every axis was updated
+    if (w < kWarmupWindows) continue;
+    ratio_sum += static_cast<double>(r);
+    ++ratio_n;
+  }
+  return ratio_sum / ratio_n;
+}
+
+TEST(ConsistencyMc, BiasCorrectionSumsMatchTheirModelVarianceUnlessTheBiasWalksFasterThanModelled) {
+  // GIVEN a gyro bias that walks exactly as the filter models it
+  // WHEN its direct measurements are fused for 300 windows of 5 s
+  // THEN each window's summed correction, squared, averages its model variance
+  // (chi-square with 1 dof per axis and window: mean 1, sd sqrt(2/900) = 0.047)
+  const double consistent = bias_correction_ratio(1.0, 31);
+  // AND a bias that walks with 16 times the modelled variance (a consumer gyro
+  // under the MEMS default) leaves corrections that add up far beyond it
+  const double too_fast = bias_correction_ratio(16.0, 32);
+  std::printf("bias correction ratio: modelled walk %.3f, 16x walk %.3f\n", consistent, too_fast);
+  EXPECT_NEAR(consistent, 1.0, 0.16);
+  EXPECT_GT(too_fast, 3.0);
 }
 
 }  // namespace

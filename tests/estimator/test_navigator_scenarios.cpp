@@ -8,6 +8,7 @@
 #include <string>
 
 #include "tests/estimator/nav_harness.hpp"
+#include "tools/sim/scenario.hpp"
 #include "tools/sim/simulator.hpp"
 
 namespace uwbnav {
@@ -41,6 +42,46 @@ TEST(NavigatorScenario, ParkingLosMeetsRmseAndConsistencyTargets) {
     EXPECT_LE(s.mean_sigma_h_m, 4.0 * s.rmse_h_m);
     EXPECT_EQ(s.diag.resets, 0U);
     EXPECT_EQ(s.diag.reinits, 0U);
+  }
+}
+
+// The parking_los drive with the IMU of one grade (tools/sim apply_imu_grade).
+dataset::Recording parking_los_with_imu(const std::string& grade, uint64_t seed) {
+  sim::Scenario sc;
+  std::string err;
+  EXPECT_EQ(sim::parse_scenario("base = parking_los\n[imu]\ngrade = " + grade + "\n", "test", sc, &err), Status::kOk)
+      << err;
+  sim::SimOutput out;
+  sim::SimOptions opt;
+  opt.seed = seed;
+  EXPECT_EQ(sim::simulate_scenario(sc, opt, out, &err), Status::kOk) << err;
+  return out.rec;
+}
+
+TEST(NavigatorScenario, BiasInstabilityIsLearnedUpForAConsumerGyroAndStaysAtTheParameterForAnAutomotiveOne) {
+  // GIVEN the same 180 s drive with a consumer IMU (gyro bias walk 3.5e-5
+  // rad/s/sqrt(s), 3.5x imu.gyro_bias_rw) and with an automotive one (1.7e-6)
+  for (uint64_t seed : {41U, 42U}) {
+    const test::RunScore consumer = test::replay(parking_los_with_imu("consumer", seed), Params{});
+    const test::RunScore automotive = test::replay(parking_los_with_imu("automotive", seed), Params{});
+    Params off;
+    ASSERT_EQ(off.set(ParamId::kImuBiasRwMaxGain, 1.0F), Status::kOk);
+    const test::RunScore consumer_off = test::replay(parking_los_with_imu("consumer", seed), off);
+    std::printf("seed %llu: gyro_rw_gain consumer %.2f automotive %.2f; accel_rw_gain consumer %.2f automotive %.2f; "
+                "consumer inside 2sigma %.4f (learning off %.4f), rmse %.3f (off %.3f)\n",
+                static_cast<unsigned long long>(seed), static_cast<double>(consumer.diag.gyro_bias_rw_gain),
+                static_cast<double>(automotive.diag.gyro_bias_rw_gain), static_cast<double>(consumer.diag.accel_bias_rw_gain),
+                static_cast<double>(automotive.diag.accel_bias_rw_gain), consumer.inside_2sigma, consumer_off.inside_2sigma,
+                consumer.rmse_h_m, consumer_off.rmse_h_m);
+    // THEN the consumer gyro's walk is learned well above the parameter, the
+    // automotive one's stays near it (the parameter is the floor), and with
+    // learning off nothing moves
+    EXPECT_GT(consumer.diag.gyro_bias_rw_gain, 1.5F);
+    EXPECT_LT(automotive.diag.gyro_bias_rw_gain, 1.3F);
+    EXPECT_GE(automotive.diag.gyro_bias_rw_gain, 1.0F);
+    EXPECT_EQ(consumer_off.diag.gyro_bias_rw_gain, 1.0F);
+    EXPECT_EQ(consumer_off.diag.accel_bias_rw_gain, 1.0F);
+    EXPECT_LE(consumer.diag.gyro_bias_rw_gain, 4.0F);  // imu.bias_rw_max_gain
   }
 }
 
