@@ -119,11 +119,9 @@ Status Navigator::configure(const SiteConfig& site, const Params& params) {
     }
   }
   params_ = params;
-  // A new site or IMU: the bias instability is learned again from the parameters.
-  gyro_rw_var_gain_ = Real(1);
-  accel_rw_var_gain_ = Real(1);
-  gyro_corr_ratio_ = accel_corr_ratio_ = Real(1);
-  bias_win_.close();
+  // A new site or IMU: the bias instability is learned again from the parameters
+  // (restart() below closes the learning window).
+  for (int b = 0; b < 2; ++b) rw_var_gain_[b] = corr_ratio_[b] = Real(1);
   update_params(params);
   const Status gs = gating_.configure(site_, params_);
   // Anchor layout: height spread decides the 2-D fix and the automatic height constraint.
@@ -352,10 +350,9 @@ bool Navigator::imu_alive(uint64_t t_us) const {
 
 void Navigator::apply_bias_rw_gains() {
   const Real max_var_gain = cfg_.bias_rw_max_gain * cfg_.bias_rw_max_gain;
-  gyro_rw_var_gain_ = std::fmin(std::fmax(gyro_rw_var_gain_, Real(1)), max_var_gain);
-  accel_rw_var_gain_ = std::fmin(std::fmax(accel_rw_var_gain_, Real(1)), max_var_gain);
-  const Real gyro_gain = std::sqrt(gyro_rw_var_gain_);
-  const Real accel_gain = std::sqrt(accel_rw_var_gain_);
+  for (Real& g : rw_var_gain_) g = std::fmin(std::fmax(g, Real(1)), max_var_gain);
+  const Real gyro_gain = std::sqrt(rw_var_gain_[BiasWindow::kGyro]);
+  const Real accel_gain = std::sqrt(rw_var_gain_[BiasWindow::kAccel]);
   imu_eff_.gyro_bias_rw = cfg_.imu.gyro_bias_rw * gyro_gain;
   imu_eff_.accel_bias_rw = cfg_.imu.accel_bias_rw * accel_gain;
   diag_.gyro_bias_rw_gain = static_cast<float>(gyro_gain);
@@ -385,15 +382,13 @@ void Navigator::learn_bias_instability(Real dt_s) {
   if (bias_win_.predicted_s() < kWindow_s) return;
   constexpr Real kForget = Real(0.7);    // weight of the previous windows' mean ratio
   constexpr Real kRatioMax = Real(100);  // one axis' ratio in one window at most
-  const auto learn = [](Real ratio, Real& ratio_avg, Real& var_gain) {
-    if (ratio < Real(0)) return;  // no axis updated in the window
-    ratio_avg = kForget * ratio_avg + (Real(1) - kForget) * ratio;
-    var_gain *= std::sqrt(std::sqrt(ratio_avg));
-  };
-  learn(bias_win_.ratio(BiasWindow::kGyro, x, p, imu_eff_.gyro_bias_rw, kRatioMax), gyro_corr_ratio_,
-        gyro_rw_var_gain_);
-  learn(bias_win_.ratio(BiasWindow::kAccel, x, p, imu_eff_.accel_bias_rw, kRatioMax), accel_corr_ratio_,
-        accel_rw_var_gain_);
+  const Real rw[2] = {imu_eff_.gyro_bias_rw, imu_eff_.accel_bias_rw};
+  for (int b = 0; b < 2; ++b) {
+    const Real ratio = bias_win_.ratio(static_cast<BiasWindow::Bias>(b), x, p, rw[b], kRatioMax);
+    if (ratio < Real(0)) continue;  // no axis updated in the window
+    corr_ratio_[b] = kForget * corr_ratio_[b] + (Real(1) - kForget) * ratio;
+    rw_var_gain_[b] *= std::sqrt(std::sqrt(corr_ratio_[b]));
+  }
   apply_bias_rw_gains();
   bias_win_.open(x, p);
 }

@@ -371,11 +371,9 @@ class Navigator {
   Real gyro_d2_ms_ = Real(0);        // same for the gyro [(rad/s)^2]
   ImuNoise imu_eff_;                 // densities used: max(parameter, measured floor)
   // Bias instability learned on line (docs/ekf.md "Learned bias instability"):
-  // variance gains on the bias random walks, in [1, bias_rw_max_gain^2].
-  Real gyro_rw_var_gain_ = Real(1);
-  Real accel_rw_var_gain_ = Real(1);
-  Real gyro_corr_ratio_ = Real(1);    // windows' mean (squared correction sum / model variance), forgetting [-]
-  Real accel_corr_ratio_ = Real(1);   // the same for the accelerometer bias [-]
+  // per BiasWindow::Bias (gyro, accelerometer).
+  Real rw_var_gain_[2] = {Real(1), Real(1)};  // variance gains on the bias random walks, in [1, bias_rw_max_gain^2] [-]
+  Real corr_ratio_[2] = {Real(1), Real(1)};   // windows' mean (squared correction sum / model variance), forgetting [-]
   BiasWindow bias_win_;               // the learning window (open while the IMU filter runs)
   Vec3 last_gyro_body_radps_ = Vec3::Zero();
 
