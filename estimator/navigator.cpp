@@ -191,6 +191,7 @@ void Navigator::update_params(const Params& params) {
   c.ground_constraints = params[ParamId::kEkfGroundConstraints] > 0.5F && site_.platform == Platform::kGround;
   c.nhc_sigma_lat = static_cast<Real>(params[ParamId::kEkfNhcSigmaLat]);
   c.nhc_sigma_vert = static_cast<Real>(params[ParamId::kEkfNhcSigmaVert]);
+  c.pitch_gradient_rad_per_mps2 = static_cast<Real>(params[ParamId::kEkfPitchGradient]) * (kPi / Real(180));
   c.zupt_sigma = static_cast<Real>(params[ParamId::kEkfZuptSigma]);
   c.zaru_sigma = static_cast<Real>(params[ParamId::kEkfZaruSigma]);
   c.height_mode = static_cast<int>(std::lround(params[ParamId::kEkfHeightMode]));
@@ -512,7 +513,14 @@ void Navigator::apply_constraints(uint64_t t_us) {
     }
   } else {
     (void)fuse(mm_nhc(ekf_.state(), ekf_.dcm(), 1, cfg_.nhc_sigma_lat));
-    (void)fuse(mm_nhc(ekf_.state(), ekf_.dcm(), 2, cfg_.nhc_sigma_vert));
+    // Vertical NHC in the road frame: the suspension pitches the body nose
+    // down by k a_lon when braking (k = ekf.pitch_gradient; a_lon from the
+    // latest IMU sample, along the horizontal heading: the window mean lags).
+    const Vec3 f_now_nav = ekf_.dcm() * (to_vec3(prev_imu_.accel_body_mps2) - ekf_.state().ba_body_mps2);
+    const Vec3 fwd_nav = ekf_.dcm().col(0);
+    const Real fwd_h = fwd_nav.head<2>().norm();
+    const Real a_lon_mps2 = fwd_h > Real(0.5) ? f_now_nav.head<2>().dot(fwd_nav.head<2>()) / fwd_h : Real(0);
+    (void)fuse(mm_nhc(ekf_.state(), ekf_.dcm(), 2, cfg_.nhc_sigma_vert, -cfg_.pitch_gradient_rad_per_mps2 * a_lon_mps2));
   }
 }
 

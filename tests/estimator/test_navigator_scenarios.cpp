@@ -8,6 +8,7 @@
 #include <string>
 
 #include "tests/estimator/nav_harness.hpp"
+#include "tools/sim/family.hpp"
 #include "tools/sim/scenario.hpp"
 #include "tools/sim/simulator.hpp"
 
@@ -82,6 +83,49 @@ TEST(NavigatorScenario, BiasInstabilityIsLearnedUpForAConsumerGyroAndStaysAtTheP
     EXPECT_EQ(consumer_off.diag.gyro_bias_rw_gain, 1.0F);
     EXPECT_EQ(consumer_off.diag.accel_bias_rw_gain, 1.0F);
     EXPECT_LE(consumer.diag.gyro_bias_rw_gain, 4.0F);  // imu.bias_rw_max_gain
+  }
+}
+
+// Largest horizontal error of the outputs inside the recording's UWB outages.
+double max_error_in_outages(const test::RunScore& s, const std::vector<sim::Outage>& outages) {
+  double worst = 0.0;
+  for (const auto& o : s.outputs) {
+    const double t = static_cast<double>(o.out.t_us) * 1e-6;
+    for (const sim::Outage& w : outages) {
+      if (o.has_truth && t >= w.start_s && t < w.end_s) worst = std::fmax(worst, std::hypot(o.err_nav_m[0], o.err_nav_m[1]));
+    }
+  }
+  return worst;
+}
+
+TEST(NavigatorScenario, RoadFrameNhcKeepsABrakingCarOnTrackThroughOutagesWithAnIdealImu) {
+  // GIVEN two drives of the outage cell (tuning seeds; 0.49 and 0.45 deg of
+  // nose-down pitch per m/s^2 of braking; outages of 5-30 s) simulated with an
+  // ideal IMU: the error while coasting is what the constraints tell the filter
+  for (uint64_t seed : {4U, 42U}) {
+    sim::Scenario sc;
+    std::string err;
+    ASSERT_EQ(sim::draw_family_scenario("outage", seed, sim::FamilyOptions{}, sc, &err), Status::kOk) << err;
+    sim::SimOptions opt;
+    opt.seed = seed;
+    opt.ideal_imu = true;
+    sim::SimOutput out;
+    ASSERT_EQ(sim::simulate_scenario(sc, opt, out, &err), Status::kOk) << err;
+    ASSERT_FALSE(sc.uwb.outages.empty());
+    // WHEN it coasts with the vertical NHC in the road frame (ekf.pitch_gradient
+    // at its default, 0.2 deg/(m/s^2)) and with the body-frame NHC (0)
+    const test::RunScore road = test::replay(out.rec, Params{});
+    Params body_frame;
+    ASSERT_EQ(body_frame.set(ParamId::kEkfPitchGradient, 0.0F), Status::kOk);
+    const test::RunScore body = test::replay(out.rec, body_frame);
+    const double e_road = max_error_in_outages(road, sc.uwb.outages);
+    const double e_body = max_error_in_outages(body, sc.uwb.outages);
+    std::printf("outage:%llu (pitch gain %.2f deg/(m/s^2)), ideal IMU: worst error in the outages %.3f m (body-frame "
+                "NHC %.3f m)\n",
+                static_cast<unsigned long long>(seed), sc.vehicle.pitch_gain_deg_per_mps2, e_road, e_body);
+    // THEN the road-frame constraint drifts less than the body-frame one
+    EXPECT_TRUE(road.all_finite);
+    EXPECT_LT(e_road, 0.8 * e_body);
   }
 }
 

@@ -303,7 +303,10 @@ DriveFingerprint fingerprint(const std::string& cell, const SimOutput& out) {
 
 // The cells that existed before coop_canyon draw exactly the drives they drew
 // then (fast drives of seed 1): adding a cell, a scenario section or a random
-// stream must never change them.
+// stream must never change them. One deliberate change since: the cars' and
+// vans' suspension pitch gradient is drawn (stop 34, its own stream), which
+// moves the tags with the body's pitch: the descriptions and row counts stayed,
+// the range sums (ground_los unchanged) and two cells' NLOS counts moved.
 TEST(SimFamily, ExistingCellsDrawTheSameDrivesAsBefore) {
 #if !defined(__x86_64__)
   // The fingerprints were taken on x86-64. Other targets (aarch64: GCC contracts
@@ -315,15 +318,15 @@ TEST(SimFamily, ExistingCellsDrawTheSameDrivesAsBefore) {
       {"ground_los", "ground_los seed 1: road 295x22.9 m, 4 anchors, 29.3 Hz per anchor, sigma 0.0966 m, NLOS episodes 0 %, 0 boxes, IMU 132 ug/rtHz, 0 outages",
         6000, 6860, 0, 0, 837169974},
       {"ground_nlos", "ground_nlos seed 1: lot 68.8x27 m, 4 anchors, 31.8 Hz per anchor, sigma 0.0771 m, NLOS episodes 25.8 %, body NLOS, 4 boxes, IMU 178 ug/rtHz, 0 outages",
-        6000, 7392, 4773, 0, 257778433},
+        6000, 7392, 4773, 0, 257778366},
       {"ground_hard", "ground_hard seed 1: lot 91x27 m, 7 anchors, 47.7 Hz per anchor, sigma 0.115 m, NLOS episodes 27.3 %, body NLOS, 1 boxes, IMU 145 ug/rtHz, 0 outages",
-        6000, 16884, 4901, 0, 808053683},
+        6000, 16884, 4938, 0, 808074860},
       {"ground_survey15", "ground_survey15 seed 1: road 179x15.2 m, 8 anchors, 33 Hz per anchor, sigma 0.116 m, NLOS episodes 8.47 %, 0 boxes, IMU 61.3 ug/rtHz, 0 outages",
-        6000, 15470, 2099, 0, 1204845863},
+        6000, 15470, 2099, 0, 1204855281},
       {"ground_blocked", "ground_blocked seed 1: lot 97.8x28.3 m, 4 anchors, 10.2 Hz per anchor, sigma 0.0874 m, NLOS episodes 2.54 %, body NLOS, 0 boxes, IMU 143 ug/rtHz, 0 outages",
-        15000, 5040, 325, 0, 224951494},
+        15000, 5040, 255, 0, 224881032},
       {"ground_sparse", "ground_sparse seed 1: road 175x17.2 m, 4 anchors, 1.2 Hz per anchor, sigma 0.0555 m, NLOS episodes 17.6 %, 0 boxes, IMU 57.5 ug/rtHz, 0 outages",
-        6000, 276, 54, 0, 21249793},
+        6000, 276, 54, 0, 21249754},
       {"air_indoor", "air_indoor seed 1: multicopter 12.6x7.38 m, 6 anchors, 17.6 Hz per anchor, sigma 0.0922 m, NLOS episodes 3.41 %, 0 boxes, IMU 185 ug/rtHz, 0 outages",
         12000, 6024, 200, 0, 31672030},
       {"air_sparse", "air_sparse seed 1: multicopter 10.6x9.81 m, 6 anchors, 1.17 Hz total, sigma 0.0679 m, NLOS episodes 12 %, 0 boxes, IMU 317 ug/rtHz, 0 outages",
@@ -331,9 +334,9 @@ TEST(SimFamily, ExistingCellsDrawTheSameDrivesAsBefore) {
       {"trolley3", "trolley3 seed 1: trolley 23.5x14.5 m, 8 anchors, 100 Hz frames, sigma 0.05 m, NLOS episodes 2.72 %, 0 boxes, no IMU, 0 outages",
         0, 142410, 4586, 0, 1803103260},
       {"outage", "outage seed 1: road 232x17.3 m, 4 anchors, 12.4 Hz per anchor, sigma 0.117 m, NLOS episodes 4.51 %, 0 boxes, IMU 57.1 ug/rtHz, 1 outages",
-        10000, 3466, 172, 0, 373258577},
+        10000, 3466, 172, 0, 373256826},
       {"ground_gnss", "ground_gnss seed 1: road 359x19.3 m, 4 anchors, 24.6 Hz per anchor, sigma 0.119 m, NLOS episodes 4.99 %, 0 boxes, IMU 58 ug/rtHz, 0 outages, UWB range 95 m, GNSS sigma 1.21 m (claimed x0.957), latency 51 ms, 2 blocked + 2 multipath windows",
-        15000, 6878, 510, 628, 279970927},
+        15000, 6878, 510, 628, 279967648},
   };
   for (const DriveFingerprint& w : want) {
     const SimOutput out = family(w.cell, 1);

@@ -972,6 +972,14 @@ void draw_scenario(const CellSpec& c, uint64_t seed, const FamilyOptions& opt, S
   if (c.kind == CellKind::kGnss) draw_gnss(r, duration, s);
   if (c.kind == CellKind::kCoop) draw_coop(r, canyon, s);
 
+  // Suspension of a car or van: nose-down pitch per m/s^2 of braking, stiff to
+  // soft (1-5 deg/g). Own stream, so that the drive's other draws do not
+  // depend on it.
+  if (!air && !trolley) {
+    Rng rs(mix_seed(name_hash(c.name), seed, 0x53555350ULL));  // "SUSP"
+    s.vehicle.pitch_gain_deg_per_mps2 = rs.uniform(0.1, 0.5);
+  }
+
   s.description = std::string(c.name) + " seed " + std::to_string(seed) + ": " + (air ? "multicopter" : trolley ? "trolley" : road ? "road" : "lot") +
                   " " + fmt(area.w()) + "x" + fmt(area.h()) + " m, " + std::to_string(n_anchors) + " anchors, " +
                   fmt(u.rate_hz) + (u.schedule == UwbSchedule::kRoundRobin ? " Hz total" : u.schedule == UwbSchedule::kFrame ? " Hz frames" : " Hz per anchor") +

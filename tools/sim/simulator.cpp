@@ -118,6 +118,9 @@ void fill_meta(const Scenario& sc, const SimOptions& opt, dataset::Recording& re
   if (opt.ideal_imu) rec.meta["sim_ideal_imu"] = "1";
   if (opt.ideal_uwb) rec.meta["sim_ideal_uwb"] = "1";
   if (sc.uwb.max_range_m > 0.0) rec.meta["sim_uwb_max_range_m"] = fmt(sc.uwb.max_range_m);
+  if (sc.platform == "ground" && sc.vehicle.pitch_gain_deg_per_mps2 != 0.0) {
+    rec.meta["sim_pitch_gain_deg_per_mps2"] = fmt(sc.vehicle.pitch_gain_deg_per_mps2);
+  }
   if (!sc.gnss.enabled) return;
   const GnssConfig& g = sc.gnss;
   // The antenna lever is site configuration (meta.ini gnss_lever_m, docs/dataset-format.md);
