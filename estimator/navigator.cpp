@@ -515,7 +515,8 @@ void Navigator::apply_constraints(uint64_t t_us) {
     (void)fuse(mm_nhc(ekf_.state(), ekf_.dcm(), 1, cfg_.nhc_sigma_lat));
     // Vertical NHC in the road frame: the suspension pitches the body nose
     // down by k a_lon when braking (k = ekf.pitch_gradient; a_lon from the
-    // latest IMU sample, along the horizontal heading: the window mean lags).
+    // IMU sample before this one, along the horizontal heading: the rest
+    // window's mean lags by a quarter second).
     const Vec3 f_now_nav = ekf_.dcm() * (to_vec3(prev_imu_.accel_body_mps2) - ekf_.state().ba_body_mps2);
     const Vec3 fwd_nav = ekf_.dcm().col(0);
     const Real fwd_h = fwd_nav.head<2>().norm();

@@ -159,7 +159,7 @@ class Navigator {
     bool ground_constraints = true;  // effective: param and Platform::kGround
     Real nhc_sigma_lat = Real(0.1);
     Real nhc_sigma_vert = Real(0.1);
-    Real pitch_gradient_rad_per_mps2 = Real(0);  // suspension pitch per longitudinal acceleration
+    Real pitch_gradient_rad_per_mps2 = Real(0);  // suspension pitch per longitudinal acceleration [rad/(m/s^2)]
     Real zupt_sigma = Real(0.02);
     Real zaru_sigma = Real(2e-3);
     int height_mode = 2;
