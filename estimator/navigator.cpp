@@ -521,7 +521,8 @@ void Navigator::apply_constraints(uint64_t t_us) {
     const Vec3 fwd_nav = ekf_.dcm().col(0);
     const Real fwd_h = fwd_nav.head<2>().norm();
     const Real a_lon_mps2 = fwd_h > Real(0.5) ? f_now_nav.head<2>().dot(fwd_nav.head<2>()) / fwd_h : Real(0);
-    (void)fuse(mm_nhc(ekf_.state(), ekf_.dcm(), 2, cfg_.nhc_sigma_vert, -cfg_.pitch_gradient_rad_per_mps2 * a_lon_mps2));
+    const Real road_pitch_rad = -cfg_.pitch_gradient_rad_per_mps2 * a_lon_mps2;
+    (void)fuse(mm_nhc(ekf_.state(), ekf_.dcm(), 2, cfg_.nhc_sigma_vert, road_pitch_rad));
   }
 }
 

@@ -162,7 +162,8 @@ TEST(MmNhc, VerticalConstraintHoldsForABodyPitchedNoseDownByTheSuspensionOnALeve
   const Real yaw = Real(0.5236);
   const Real pitch = Real(0.010);
   x.vel_nav_mps = Vec3(Real(8) * std::cos(yaw), Real(8) * std::sin(yaw), Real(0));
-  x.q_nav_body = quat_normalised(quat_mul(quat_from_yaw(yaw), Quat(std::cos(pitch / 2), Real(0), std::sin(pitch / 2), Real(0))));
+  const Quat nose_down(std::cos(pitch / 2), Real(0), std::sin(pitch / 2), Real(0));  // about body y
+  x.q_nav_body = quat_normalised(quat_mul(quat_from_yaw(yaw), nose_down));
   const Mat3 c = quat_to_dcm(x.q_nav_body);
   // THEN the body-frame vertical velocity is v sin(theta) = 0.08 m/s, which the
   // body-frame constraint reads as a violation and the road-frame one does not

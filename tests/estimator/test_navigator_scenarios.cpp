@@ -92,7 +92,8 @@ double max_error_in_outages(const test::RunScore& s, const std::vector<sim::Outa
   for (const auto& o : s.outputs) {
     const double t = static_cast<double>(o.out.t_us) * 1e-6;
     for (const sim::Outage& w : outages) {
-      if (o.has_truth && t >= w.start_s && t < w.end_s) worst = std::fmax(worst, std::hypot(o.err_nav_m[0], o.err_nav_m[1]));
+      if (!o.has_truth || t < w.start_s || t >= w.end_s) continue;
+      worst = std::fmax(worst, std::hypot(o.err_nav_m[0], o.err_nav_m[1]));
     }
   }
   return worst;
