@@ -108,6 +108,8 @@ TEST(EvalFamily, HonestyFiguresFollowTheirDefinitions) {
   EXPECT_EQ(m.nis_in, 1U);
   EXPECT_EQ(m.fallback_n, 1U);
   EXPECT_NEAR(m.fallback_sq_sum, 2.0, 1e-12);
+  EXPECT_EQ(m.fallback_hon_n, 1U);   // the fallback epoch has a sigma
+  EXPECT_EQ(m.fallback_in2s_h, 1U);  // sqrt 2 <= 2 sqrt 2
   EXPECT_EQ(m.recoveries.reinits, 1U);
   EXPECT_EQ(m.nlos.tp, 1U);  // only the first range carries a label
 
@@ -118,6 +120,8 @@ TEST(EvalFamily, HonestyFiguresFollowTheirDefinitions) {
   EXPECT_NEAR(c.nees_in, 2.0 / 3.0, 1e-12);
   EXPECT_NEAR(c.nis_mean, 4.25 / 2.0, 1e-12);
   EXPECT_NEAR(c.fallback_share, 0.25, 1e-12);
+  EXPECT_NEAR(c.fallback_in2s_h, 1.0, 1e-12);
+  EXPECT_NEAR(c.inertial_in2s_h, 0.5, 1e-12);  // the IMU filter's two epochs with a sigma: one inside
   EXPECT_NEAR(c.fused_share, 2.0 / 3.0, 1e-12);
   EXPECT_NEAR(c.rmse_med, m.rmse_h_m, 1e-12);
 }

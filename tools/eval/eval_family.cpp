@@ -187,7 +187,12 @@ DriveMetrics drive_metrics(const dataset::Recording& rec, const ReplayResult& re
     }
     if (!(std::isfinite(sx) && std::isfinite(sy) && sx > 0.0 && sy > 0.0)) continue;
     ++m.hon_n;
-    m.in2s_h += h <= 2.0 * std::sqrt(sx * sx + sy * sy) ? 1 : 0;
+    const bool in_h = h <= 2.0 * std::sqrt(sx * sx + sy * sy);
+    m.in2s_h += in_h ? 1 : 0;
+    if (e.mode != static_cast<int>(NavMode::kInertial)) {
+      ++m.fallback_hon_n;
+      m.fallback_in2s_h += in_h ? 1 : 0;
+    }
     m.in2s_x += std::fabs(ex) <= 2.0 * sx ? 1 : 0;
     m.in2s_y += std::fabs(ey) <= 2.0 * sy ? 1 : 0;
     // NEES of the horizontal position with P = [sx^2, r sx sy; r sx sy, sy^2]:
@@ -237,7 +242,7 @@ CellSummary summarise_cell(const std::string& name, const std::vector<DriveMetri
   c.name = name;
   std::vector<double> rmse, mx, p95, ttfe;
   size_t epochs = 0, good = 0, hon = 0, in_h = 0, in_x = 0, in_y = 0, nees_n = 0, nees_in = 0, nis_n = 0, nis_in = 0;
-  size_t err_n = 0, fb_n = 0, sp_n = 0, sp_in = 0;
+  size_t err_n = 0, fb_n = 0, fb_hon = 0, fb_in = 0, sp_n = 0, sp_in = 0;
   double err_sq = 0.0, sp_sq = 0.0;
   double nees_sum = 0, nis_sum = 0, fb_sq = 0;
   uint64_t resets = 0, reinits = 0, inflations = 0, reanchors = 0, used = 0, rejected = 0;
@@ -274,6 +279,8 @@ CellSummary summarise_cell(const std::string& name, const std::vector<DriveMetri
     reanchors += d.recoveries.reanchors;
     fb_n += d.fallback_n;
     fb_sq += d.fallback_sq_sum;
+    fb_hon += d.fallback_hon_n;
+    fb_in += d.fallback_in2s_h;
     sp_n += d.sparse_n;
     sp_sq += d.sparse_sq_sum;
     sp_in += d.sparse_in2s_xy;
@@ -305,6 +312,8 @@ CellSummary summarise_cell(const std::string& name, const std::vector<DriveMetri
   c.fallback_rmse = fb_n > 0 ? std::sqrt(fb_sq / static_cast<double>(fb_n)) : std::nan("");
   c.inertial_rmse =
       err_n > fb_n ? std::sqrt(std::max(err_sq - fb_sq, 0.0) / static_cast<double>(err_n - fb_n)) : std::nan("");
+  c.fallback_in2s_h = ratio(static_cast<double>(fb_in), static_cast<double>(fb_hon));
+  c.inertial_in2s_h = ratio(static_cast<double>(in_h - fb_in), static_cast<double>(hon - fb_hon));
   c.fused_share = ratio(static_cast<double>(used), static_cast<double>(used + rejected));
   c.sparse_share = ratio(static_cast<double>(sp_n), static_cast<double>(err_n));
   c.sparse_rmse = sp_n > 0 ? std::sqrt(sp_sq / static_cast<double>(sp_n)) : std::nan("");
@@ -376,8 +385,8 @@ void print_family_tables(std::FILE* f, const std::vector<CellSummary>& rows, boo
     t2.push_back({c.name, pct(c.in2s_h), pct(c.in2s_x), pct(c.in2s_y), num(c.nees_mean, 2), pct(c.nees_in),
                   num(c.nis_mean, 2), pct(c.nis_in), num(c.resets_per_h, 1), num(c.inflations_per_h, 1),
                   num(c.reanchors_per_h, 1), num(c.reinits_per_h, 1),
-                  pct(c.fallback_share), num(c.fallback_rmse, 3), num(c.inertial_rmse, 3), pct(c.fused_share), pct(c.nlos_precision),
-                  pct(c.nlos_recall)});
+                  pct(c.fallback_share), num(c.fallback_rmse, 3), pct(c.fallback_in2s_h), num(c.inertial_rmse, 3),
+                  pct(c.inertial_in2s_h), pct(c.fused_share), pct(c.nlos_precision), pct(c.nlos_recall)});
   }
   std::fprintf(f, "%sAccuracy and availability (horizontal error of the body origin; medians and worst over drives)%s\n\n",
                markdown ? "**" : "", markdown ? "**" : "");
@@ -389,7 +398,8 @@ void print_family_tables(std::FILE* f, const std::vector<CellSummary>& rows, boo
                markdown ? "**" : "", markdown ? "**" : "");
   print_table(f,
               {"cell", "in 2sig h", "in 2sig x", "in 2sig y", "NEES mean", "NEES<=5.99", "NIS mean", "NIS<=3.84",
-               "resets/h", "inflate/h", "re-anchor/h", "re-align/h", "fallback", "fallback RMSE [m]", "IMU filter RMSE [m]", "fused", "NLOS P", "NLOS R"},
+               "resets/h", "inflate/h", "re-anchor/h", "re-align/h", "fallback", "fallback RMSE [m]",
+               "fallback in 2sig h", "IMU filter RMSE [m]", "IMU filter in 2sig h", "fused", "NLOS P", "NLOS R"},
               t2, markdown);
   // Sparse anchors (cells where the vehicle sometimes hears fewer than 3 anchors).
   std::vector<std::vector<std::string>> t3;

@@ -53,6 +53,7 @@ struct DriveMetrics {
   // Fallback: good epochs with truth whose mode is not the inertial filter.
   size_t fallback_n = 0;
   double fallback_sq_sum = 0.0;
+  size_t fallback_hon_n = 0, fallback_in2s_h = 0;  // of hon_n / in2s_h, the fallback's share
   // Sparse anchors: good epochs with truth inside a stretch of >= 20 s in which
   // fewer than 3 distinct anchors (vehicle ids excluded) were heard in the 2 s
   // before each epoch (issue 16's "sees < 3 anchors for >= 20 s"; computed from
@@ -85,6 +86,7 @@ struct CellSummary {
   double inflations_per_h = 0.0, reanchors_per_h = 0.0;
   double fallback_share = 0.0, fallback_rmse = 0.0;
   double inertial_rmse = 0.0;  // pooled horizontal RMSE of the epochs published by the IMU filter [m]
+  double fallback_in2s_h = 0.0, inertial_in2s_h = 0.0;  // "in 2sig h" of each mode's epochs
   double fused_share = 0.0;
   double sparse_share = 0.0, sparse_rmse = 0.0, sparse_max = 0.0, sparse_in2s = 0.0;  // epochs with < 3 anchors heard
   double nlos_precision = 0.0, nlos_recall = 0.0;
