@@ -42,6 +42,11 @@ find docs/results -name 'series_*.csv' -delete -o -name 'track_*.csv' -delete -o
   echo
   "$uwbnav" eval outage --seeds reporting --markdown --jobs 2
   echo
+  echo "The same on 80 reporting seeds, as many as the tuning figures use (20 give a few outages per"
+  echo "row). Reproduce: \`uwbnav eval outage --seeds 1000-1079 --markdown\`."
+  echo
+  "$uwbnav" eval outage --seeds 1000-1079 --markdown --jobs 2
+  echo
   echo "## UWB-only 3-tag trolley, commissioned by self-calibration (issue 19)"
   echo
   echo "Each reporting drive of the trolley3 cell is first self-calibrated (\`uwbnav calibrate --method self\`:"
