@@ -223,6 +223,7 @@ class Navigator {
     Real sigma_v_m = Real(-1);  // vertical 1-sigma [m], negative for a 2-D fix
     Real yaw_rel_rad = Real(0); // gyro-integrated yaw of the levelled attitude at t_us
     int tag_index = -1;
+    Real age_s = Real(0);       // age of the oldest range in the fix at t_us [s]
   };
   // Least-squares range rate of one anchor over a block of up to
   // kTrackSpeedWindowUs (rest check): sums relative to the block's first

@@ -367,8 +367,10 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix) {
   if (window_us < cfg_.init_window_us) window_us = cfg_.init_window_us;
   const Real sigma = std::sqrt(r_los_m2_);
   size_t m = 0;
+  Real oldest_s = Real(0);
   for (size_t i = 0; i < n; ++i) {
     if (age_us[i] > window_us) break;
+    oldest_s = static_cast<Real>(static_cast<uint32_t>(age_us[i])) * Real(1e-6);
     // A range taken earlier saw the vehicle elsewhere: inflate by speed x age.
     const Real smear = cfg_.init_speed * static_cast<Real>(static_cast<uint32_t>(age_us[i])) * Real(1e-6);
     ranges[m] = ranges[i];
@@ -401,6 +403,7 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix) {
   fix.sigma_v_m = opt.two_d ? Real(-1) : std::sqrt(var_factor * static_cast<Real>(ls.cov_nav_m2[2][2]));
   fix.yaw_rel_rad = quat_yaw(q_init_);
   fix.tag_index = tag_index;
+  fix.age_s = oldest_s;
   return std::isfinite(fix.sigma_h_m);
 }
 
@@ -637,7 +640,17 @@ void Navigator::try_heading(uint64_t t_us) {
     if (fn.t_us - f.t_us > kTrackMaxSpanUs) break;
     const Vec3 chord = end->tag_pos_nav_m - f.tag_pos_nav_m;
     const Real d = chord.head<2>().norm();
-    const Real sig = std::sqrt(end->sigma_h_m * end->sigma_h_m + f.sigma_h_m * f.sigma_h_m);
+    // Each fix allowed for ekf.init_speed x the age of its ranges; the chord
+    // says how fast the vehicle went between its ends (at least: its length
+    // less twice the fixes' noise), and whatever it went faster moved the
+    // vehicle while those ranges were taken (sparse ranging: metres). That
+    // travel widens both fixes; it needs nothing but the track.
+    const Real sig0_2 = end->sigma_h_m * end->sigma_h_m + f.sigma_h_m * f.sigma_h_m;
+    const Real chord_dt_s = static_cast<Real>(static_cast<uint32_t>(end->t_us - f.t_us)) * Real(1e-6);
+    const Real speed_lo = chord_dt_s > Real(0) ? std::fmax(d - Real(2) * std::sqrt(sig0_2), Real(0)) / chord_dt_s : Real(0);
+    const Real excess_mps = std::fmax(speed_lo - cfg_.init_speed, Real(0));
+    const Real smear2 = excess_mps * excess_mps * (end->age_s * end->age_s + f.age_s * f.age_s);
+    const Real sig = std::sqrt(sig0_2 + smear2);
     if (d < kMinChord_m || d < Real(5) * sig) continue;
     if (cv_mode_) {
       // A chord longer than the vehicle can have driven in its time has a

@@ -154,11 +154,16 @@ TEST(NavigatorIntegrity, OneAnchorRangingShortAgainAndAgainIsCaughtWhileAnotherA
   // the gate on S, the ranges-only filter of this pull-away with two anchors
   // hands over 11 m off instead of 5 m (a lagging filter's correct long ranges
   // are rejected too): inflation and re-anchoring leave the heading error, and
-  // the third failure within the recovery memory re-aligns once. More than one would be the old
-  // 12 s drift of a filter that nothing catches.
+  // the third failure within the recovery memory re-aligns once. Since the
+  // track's chords count the travel their fixes' ranges missed (docs/ekf.md
+  // "Initialisation"), this two-anchor start finds no chord heading it can
+  // trust before the 30 s timeout; the yaw bank then starts the filter 71
+  // degrees off, and a second re-alignment 0.5 s later catches that (the IMU
+  // filter's epochs: RMSE 0.13 -> 0.09 m, MAX 4.4 -> 1.2 m). More than two
+  // would be the old 12 s drift of a filter that nothing catches.
   EXPECT_TRUE(s.all_finite);
   EXPECT_GE(s.diag.short_range_fails, 1U);
-  EXPECT_LE(s.diag.reinits, 1U);
+  EXPECT_LE(s.diag.reinits, 2U);
   EXPECT_EQ(s.diag.resets, 0U);
   EXPECT_LT(s.rmse_h_m, 1.0);
 }
