@@ -647,7 +647,8 @@ void Navigator::try_heading(uint64_t t_us) {
     // travel widens both fixes; it needs nothing but the track.
     const Real sig0_2 = end->sigma_h_m * end->sigma_h_m + f.sigma_h_m * f.sigma_h_m;
     const Real chord_dt_s = static_cast<Real>(static_cast<uint32_t>(end->t_us - f.t_us)) * Real(1e-6);
-    const Real speed_lo = chord_dt_s > Real(0) ? std::fmax(d - Real(2) * std::sqrt(sig0_2), Real(0)) / chord_dt_s : Real(0);
+    const Real speed_lo =
+        chord_dt_s > Real(0) ? std::fmax(d - Real(2) * std::sqrt(sig0_2), Real(0)) / chord_dt_s : Real(0);
     const Real excess_mps = std::fmax(speed_lo - cfg_.init_speed, Real(0));
     const Real smear2 = excess_mps * excess_mps * (end->age_s * end->age_s + f.age_s * f.age_s);
     const Real sig = std::sqrt(sig0_2 + smear2);
