@@ -392,6 +392,7 @@ class Navigator {
   Vec3 ba_init_ = Vec3::Zero();     // accelerometer bias carried over a re-alignment [m/s^2]
   Real accel_h_ms_ = Real(0);
   Vec3 rest_ref_body_mps2_ = Vec3::Zero();  // specific force when rest was confirmed (body) [m/s^2]
+  Vec3 rest_ref_gyro_body_radps_ = Vec3::Zero();  // mean gyro when rest was confirmed (body) [rad/s]
   bool imu_still_now_ = false;        // result of the latest rest check (init_on_imu, constraint rate)
   bool rest_ref_valid_ = false;       // EMA of the squared horizontal specific force, levelled frame [(m/s^2)^2]
   TrackFix track_[kTrackCapacity];

@@ -46,8 +46,9 @@ constexpr Real kLevelBiasGain_radps2 = Real(0.01); // ... and its gyro-bias inte
 // bias it has not yet learnt (0.5 deg/s over 5 s, 0.04 rad).
 constexpr Real kTiltSigmaAir_rad = Real(0.1);
 constexpr Real kMaxLinearYawSigma_rad = Real(0.5); // largest yaw 1-sigma the IMU filter is started with
-constexpr Real kAccelEmaTau_s = Real(0.5);
-constexpr Real kRestMaxForceChange_mps2 = Real(0.1);  // rest: largest change of the mean specific force [m/s^2]         // horizontal acceleration EMA time constant [s]
+constexpr Real kAccelEmaTau_s = Real(0.5);             // horizontal acceleration EMA time constant [s]
+constexpr Real kRestMaxForceChange_mps2 = Real(0.1);   // rest held: largest change of the mean specific force [m/s^2]
+constexpr Real kRestMaxGyroChange_radps = Real(0.005); // rest held: largest change of the mean gyro, 2.5 sigma of the rest bias's 0.002 rad/s [rad/s]
 constexpr Real kCvStartVelSigma_mps = Real(2);     // ranges-only start: horizontal velocity 1-sigma [m/s]
 constexpr Real kCvStartVelSigmaV_mps = Real(0.5);  // ... vertical [m/s]
 
@@ -198,7 +199,16 @@ bool Navigator::imu_still(uint64_t t_us) {
   const Real speed_bound = speed_lower_bound(t_us);
   if (!rest_ref_valid_) {
     if (speed_bound > kRestTrackSpeed_mps) return false;
+    // A multicopter can turn on the spot at a steady rate, which no IMU window
+    // tells from a gyro bias: once a rest has measured the bias, a later rest
+    // of an air platform must find it again, within 3 sigma of the turn-on prior
+    // (tuning drive outage:28 yaws at up to 0.8 rad/s while hovering).
+    if (site_.platform == Platform::kAir && levelled_at_rest_ &&
+        !((rest_.gyro_mean() - bg_ref_).cwiseAbs().maxCoeff() < Real(3) * cfg_.gyro_bias_init)) {
+      return false;
+    }
     rest_ref_body_mps2_ = rest_.accel_mean();
+    rest_ref_gyro_body_radps_ = rest_.gyro_mean();
     rest_ref_valid_ = true;
     return true;
   }
@@ -206,7 +216,12 @@ bool Navigator::imu_still(uint64_t t_us) {
     rest_ref_valid_ = false;
     return false;
   }
-  return (rest_.accel_mean() - rest_ref_body_mps2_).norm() < kRestMaxForceChange_mps2;
+  // Held: the body frame has not turned (gyro mean = bias, which does not move
+  // in seconds) and the specific force measured in it has not changed.
+  const Real window_s = std::fmax(rest_.window_span_s(), Real(0.05));
+  const Real gyro_change_max = std::fmax(kRestMaxGyroChange_radps, Real(4) * imu_eff_.gyro_noise * std::sqrt(Real(6) / window_s));
+  return (rest_.accel_mean() - rest_ref_body_mps2_).norm() < kRestMaxForceChange_mps2 &&
+         (rest_.gyro_mean() - rest_ref_gyro_body_radps_).norm() < gyro_change_max;
 }
 
 Real Navigator::speed_lower_bound(uint64_t t_us) const {
@@ -506,7 +521,10 @@ void Navigator::align_in_background(int anchor_index, int tag_index, const UwbRa
 }
 
 Real Navigator::levelled_tilt_sigma() const {
-  if (levelled_at_rest_) return kTiltSigmaRest_rad;
+  // A rest window's levelling holds while the vehicle stands; once a
+  // multicopter flies, its complementary filter holds the tilt instead, with
+  // that filter's error (the mean horizontal acceleration over 1/k_p).
+  if (levelled_at_rest_ && (site_.platform != Platform::kAir || imu_still_now_)) return kTiltSigmaRest_rad;
   return site_.platform == Platform::kAir ? kTiltSigmaAir_rad : kTiltSigmaMoving_rad;
 }
 
