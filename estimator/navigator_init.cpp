@@ -217,9 +217,12 @@ bool Navigator::imu_still(uint64_t t_us) {
     return false;
   }
   // Held: the body frame has not turned (gyro mean = bias, which does not move
-  // in seconds) and the specific force measured in it has not changed.
+  // in seconds) and the specific force measured in it has not changed. A noisy
+  // gyro's window mean moves by itself: 4 sigma of the norm of the difference
+  // of two window means of white noise (density N over T: N sqrt(2/T) per axis).
   const Real window_s = std::fmax(rest_.window_span_s(), Real(0.05));
-  const Real gyro_change_max = std::fmax(kRestMaxGyroChange_radps, Real(4) * imu_eff_.gyro_noise * std::sqrt(Real(6) / window_s));
+  const Real gyro_change_max =
+      std::fmax(kRestMaxGyroChange_radps, Real(4) * imu_eff_.gyro_noise * std::sqrt(Real(6) / window_s));
   return (rest_.accel_mean() - rest_ref_body_mps2_).norm() < kRestMaxForceChange_mps2 &&
          (rest_.gyro_mean() - rest_ref_gyro_body_radps_).norm() < gyro_change_max;
 }
