@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstddef>
 
+#include "estimator/trig.hpp"
 #include "estimator/types.hpp"
 
 namespace uwbnav {
@@ -109,8 +110,9 @@ inline Quat quat_exp(const Vec3& rotvec_rad) {
   const Real angle = rotvec_rad.norm();
   const Real half = Real(0.5) * angle;
   // sin(x)/x with its series below 1e-4 rad (exact to float precision).
-  const Real sinc = angle < Real(1e-4) ? Real(0.5) - angle * angle / Real(48) : std::sin(half) / angle;
-  return Quat(std::cos(half), sinc * rotvec_rad.x(), sinc * rotvec_rad.y(), sinc * rotvec_rad.z());
+  const SinCos sc = sin_cos(half);
+  const Real sinc = angle < Real(1e-4) ? Real(0.5) - angle * angle / Real(48) : sc.sin / angle;
+  return Quat(sc.cos, sinc * rotvec_rad.x(), sinc * rotvec_rad.y(), sinc * rotvec_rad.z());
 }
 
 inline Quat quat_normalised(const Quat& q) {
@@ -137,7 +139,8 @@ inline Real quat_yaw(const Quat& q) {
 
 // Quaternion of a pure rotation about nav z by yaw_rad.
 inline Quat quat_from_yaw(Real yaw_rad) {
-  return Quat(std::cos(Real(0.5) * yaw_rad), Real(0), Real(0), std::sin(Real(0.5) * yaw_rad));
+  const SinCos sc = sin_cos(Real(0.5) * yaw_rad);
+  return Quat(sc.cos, Real(0), Real(0), sc.sin);
 }
 
 // Roll/pitch-only attitude whose body z axis is along the measured specific
@@ -146,8 +149,10 @@ inline Quat quat_level(const Vec3& accel_body_mps2) {
   const Real roll = std::atan2(accel_body_mps2.y(), accel_body_mps2.z());
   const Real pitch = std::atan2(-accel_body_mps2.x(), std::sqrt(accel_body_mps2.y() * accel_body_mps2.y() +
                                                                  accel_body_mps2.z() * accel_body_mps2.z()));
-  const Quat qr(std::cos(Real(0.5) * roll), std::sin(Real(0.5) * roll), Real(0), Real(0));
-  const Quat qp(std::cos(Real(0.5) * pitch), Real(0), std::sin(Real(0.5) * pitch), Real(0));
+  const SinCos r = sin_cos(Real(0.5) * roll);
+  const SinCos p = sin_cos(Real(0.5) * pitch);
+  const Quat qr(r.cos, r.sin, Real(0), Real(0));
+  const Quat qp(p.cos, Real(0), p.sin, Real(0));
   return quat_mul(qp, qr);  // C = Ry(pitch) Rx(roll), yaw 0
 }
 

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "estimator/navigator.hpp"
+#include "estimator/trig.hpp"
 
 namespace uwbnav {
 namespace {
@@ -691,8 +692,9 @@ void Navigator::try_heading(uint64_t t_us) {
     if (chords == 0) first_est = est;
     est_min = std::fmin(est_min, rel);
     est_max = std::fmax(est_max, rel);
-    sum_c += d * std::cos(est);
-    sum_s += d * std::sin(est);
+    const SinCos sc = sin_cos(est);
+    sum_c += d * sc.cos;
+    sum_s += d * sc.sin;
     length += d;
     sig_sum += sig;
     ++chords;
@@ -771,8 +773,9 @@ bool Navigator::average_two_tag_heading(uint64_t t_us, Real yaw_rad, Real sigma_
     if (dev * dev > Real(9) * (sigma_rad * sigma_rad + Real(1) / h.sum_w)) h = HeadingAverage{};
   }
   const Real w = Real(1) / (sigma_rad * sigma_rad);
-  h.sum_c += w * std::cos(yaw_rad);
-  h.sum_s += w * std::sin(yaw_rad);
+  const SinCos sc = sin_cos(yaw_rad);
+  h.sum_c += w * sc.cos;
+  h.sum_s += w * sc.sin;
   h.sum_w += w;
   ++h.n;
   h.last_t_us = t_us;

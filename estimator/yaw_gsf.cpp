@@ -5,6 +5,8 @@
 
 #include <cmath>
 
+#include "estimator/trig.hpp"
+
 namespace uwbnav {
 namespace {
 
@@ -24,8 +26,9 @@ constexpr Real kMinWeightSpeed_mps = Real(0.3);
 Vec3 dyaw(const Vec3& rotated) { return Vec3(-rotated.y(), rotated.x(), Real(0)); }
 
 Vec3 rot_z(Real psi, const Vec3& x) {
-  const Real c = std::cos(psi);
-  const Real s = std::sin(psi);
+  const SinCos sc = sin_cos(psi);
+  const Real c = sc.cos;
+  const Real s = sc.sin;
   return Vec3(c * x.x() - s * x.y(), s * x.x() + c * x.y(), x.z());
 }
 

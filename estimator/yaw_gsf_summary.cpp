@@ -5,6 +5,7 @@
 // build these for size.
 #include <cmath>
 
+#include "estimator/trig.hpp"
 #include "estimator/yaw_gsf.hpp"
 
 namespace uwbnav {
@@ -13,8 +14,9 @@ Real YawGsf::yaw_mean() const {
   Real c = Real(0);
   Real s = Real(0);
   for (int k = 0; k < kModels; ++k) {
-    c += w_[k] * std::cos(x_[k](6));
-    s += w_[k] * std::sin(x_[k](6));
+    const SinCos sc = sin_cos(x_[k](6));
+    c += w_[k] * sc.cos;
+    s += w_[k] * sc.sin;
   }
   return std::atan2(s, c);
 }
