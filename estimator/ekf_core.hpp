@@ -82,6 +82,8 @@ class EkfCore {
   // u = P H^T and returns H P H^T; update_prepared() then fuses with the
   // innovation and R chosen after the gate, without recomputing u.
   Real prepare(const ErrRow& h);
+  // P H^T of the last prepare() (the direction of its update's correction).
+  const ErrVec& prepared_cov_h() const { return u_; }
   // consider_range_errors: the range-error states are Schmidt "consider"
   // states for this update (their uncertainty enters S and the cross
   // covariances, their values and their own covariance block stay).

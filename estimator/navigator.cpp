@@ -20,6 +20,13 @@ Real seconds(int64_t dt_us) { return static_cast<Real>(dt_us) * Real(1e-6); }
 
 int64_t diff_us(uint64_t a, uint64_t b) { return static_cast<int64_t>(a) - static_cast<int64_t>(b); }
 
+// Iterated range update (iterated_range_innovation): re-linearise when the
+// range circle bends away by more than this many range sigmas over the
+// first-order step across the line of sight; at most this many times; done
+// when the position step moves less than this.
+constexpr Real kIekfCurvSigma = Real(0.5);
+constexpr int kIekfMaxIter = 3;
+constexpr Real kIekfSettle_m = Real(0.01);
 // Shortest IMU interval integrated [us].
 constexpr uint64_t kMinImuDtUs = 100;
 // ZUPT only when the filter speed is also below this [m/s].
@@ -828,7 +835,10 @@ RangeReport Navigator::on_range(const UwbRange& range) {
     const bool central = std::fabs(innov) < kLearnOffsetMaxZ * std::sqrt(s_nom);
     const bool learn_offsets = nominal && moving && central && !escape && !d.bound;
     const Real r_add = std::isfinite(d.r_add_m2) && d.r_add_m2 > 0.0F ? static_cast<Real>(d.r_add_m2) : Real(0);
-    used = ekf_.update_prepared(innov, r_nom * scale + r_add, !learn_offsets).applied;
+    const Real r_var = r_nom * scale + r_add;
+    const Real innov_fused =
+        iterated_range_innovation(pred, static_cast<Real>(range.range_m), innov, hph, r_var, ti, ai, dt_r, es);
+    used = ekf_.update_prepared(innov_fused, r_var, !learn_offsets).applied;
   }
   gating_.on_result(ctx, d, used);
 
@@ -881,6 +891,80 @@ RangeReport Navigator::on_range(const UwbRange& range) {
     }
   }
   return rep;
+}
+
+Real Navigator::iterated_range_innovation(const RangePrediction& first, Real range_m, Real innovation_m, Real hph_m2,
+                                          Real r_var_m2, int tag_index, int anchor_index, Real dt_s,
+                                          const RangeErrorSlots& slots) {
+  // Iterated update (IEKF: Gauss-Newton on the scalar range; Bell & Cathey,
+  // IEEE TAC 1993). The first-order update takes the range as linear in the
+  // position; where its correction dp moves the tag across the line of sight
+  // by d, the range circle bends away by d^2 / (2 r) over that step, and where
+  // that exceeds kIekfCurvSigma range sigmas the step is recomputed from the
+  // prior with the range re-linearised at the corrected position, until the
+  // position step settles (kIekfSettle_m) or after kIekfMaxIter
+  // re-linearisations. The range is linear in every other state to well
+  // within its noise (velocity over a few ms, attitude through a lever arm,
+  // additive offsets), so only the position is moved: with x_i = x + dp_i,
+  //   innovation_i = z - h(x_i) + H_i,p dp_i,
+  // fused with the Jacobian H_i of the last prepare(), applies the Gauss-Newton
+  // step dx_{i+1} to the prior and takes the covariance from H_i. The
+  // iteration only ever shrinks the first-order position step: where it would
+  // lengthen it (the circle bending towards the step, a mirror position of
+  // two anchors) the first-order update stands. Nominal ranges (centimetre
+  // steps) return at the first test. Element loops, not Eigen block
+  // expressions: this runs rarely and its code counts against the M4F flash
+  // budget (docs/footprint.md).
+  const Real s0 = hph_m2 + r_var_m2;
+  if (!(s0 > Real(0)) || !first.valid) return innovation_m;
+  const Real curv_max = kIekfCurvSigma * std::sqrt(r_var_m2);
+  const ErrVec& k = ekf_.prepared_cov_h();
+  Real c = innovation_m / s0;  // the position step is c P_p H^T of the last prepare()
+  Real innov = innovation_m;
+  Real u[3] = {first.los_nav(0), first.los_nav(1), first.los_nav(2)};
+  Real r = first.geometric_m;
+  Real first_step2 = Real(0);
+  for (int i = 0; i < 3; ++i) first_step2 += k(ErrIdx::kPos + i) * k(ErrIdx::kPos + i) * c * c;
+  for (int it = 0; it < kIekfMaxIter; ++it) {
+    Real dp[3], along = Real(0), step2 = Real(0);
+    for (int i = 0; i < 3; ++i) {
+      dp[i] = k(ErrIdx::kPos + i) * c;
+      along += u[i] * dp[i];
+      step2 += dp[i] * dp[i];
+    }
+    if (!((step2 - along * along) / (Real(2) * r) > curv_max)) break;
+    // The prediction at x + dp, on the filter's own state (no copy of it):
+    // its position is moved and restored bit for bit.
+    Vec3& pos = ekf_.mutable_state().pos_nav_m;
+    const Vec3 pos0 = pos;
+    for (int i = 0; i < 3; ++i) pos(i) += dp[i];
+    const RangePrediction pi = mm_range_predict(ekf_.state(), ekf_.dcm(), cv_mode_ ? Vec3::Zero() : last_gyro_body_radps_,
+                                                model_lever(tag_index), to_vec3(site_.anchors[anchor_index].pos_nav_m),
+                                                dt_s, slots);
+    pos = pos0;
+    if (!pi.valid) break;
+    Real innov_i = range_m - pi.range_m;
+    for (int i = 0; i < 3; ++i) innov_i += pi.h(ErrIdx::kPos + i) * dp[i];
+    const Real s = ekf_.prepare(pi.h) + r_var_m2;  // k is now P H_i^T
+    const Real c_i = innov_i / s;
+    Real next2 = Real(0), moved2 = Real(0);
+    for (int i = 0; i < 3; ++i) {
+      const Real n = k(ErrIdx::kPos + i) * c_i;
+      next2 += n * n;
+      moved2 += (n - dp[i]) * (n - dp[i]);
+      u[i] = pi.los_nav(i);
+    }
+    if (!(next2 <= first_step2)) {
+      (void)ekf_.prepare(first.h);
+      return innovation_m;
+    }
+    c = c_i;
+    innov = innov_i;
+    r = pi.geometric_m;
+    ++diag_.iterated_updates;
+    if (moved2 < kIekfSettle_m * kIekfSettle_m) break;
+  }
+  return innov;
 }
 
 void Navigator::monitor_divergence(uint64_t t_us, Real nis) {

@@ -9,6 +9,7 @@
 #include "estimator/ekf_core.hpp"
 #include "estimator/gating.hpp"
 #include "estimator/ls_taylor.hpp"
+#include "estimator/mm_range.hpp"
 #include "estimator/nlos/gating_layer.hpp"
 #include "estimator/params.hpp"
 #include "estimator/rbf_bridge.hpp"
@@ -40,6 +41,7 @@ struct NavDiagnostics {
   uint32_t integrity_fails = 0;  // integrity checks the filter failed (LS fix disagrees beyond chi-square)
   uint32_t short_range_fails = 0;  // short-range tests failed (ranges from two anchors clearly shorter than predicted)
   uint32_t operator_resets = 0;  // reset() calls (console `reset filter`)
+  uint32_t iterated_updates = 0;  // range re-linearisations of the iterated update (metre steps across the line of sight)
   uint64_t last_imu_t_us = 0;
   uint64_t last_range_used_t_us = 0;
   float uwb_sigma_m = 0.0F;      // learned LOS ranging 1-sigma [m]
@@ -299,6 +301,11 @@ class Navigator {
   // heading from the velocity. False when the filter restarted on the way.
   bool advance_cv(uint64_t t_us);
   void check_health(bool after_predict = true);
+  // Not inlined: its locals stay off on_range's frame, which is on the
+  // deepest stack chain (docs/footprint.md).
+  [[gnu::noinline]] Real iterated_range_innovation(const RangePrediction& first, Real range_m, Real innovation_m,
+                                                   Real hph_m2, Real r_var_m2, int tag_index, int anchor_index, Real dt_s,
+                                                   const RangeErrorSlots& slots);
   void monitor_divergence(uint64_t t_us, Real nis);
   void recover(uint64_t t_us, uint8_t min_level = 1);
   void integrity_check(uint64_t t_us, int tag_index);

@@ -93,11 +93,11 @@ void App::reset_filter() {
   validator_.reset_history();
 }
 
-// The counters of NavDiagnostics (imu_samples .. operator_resets) are its leading
+// The counters of NavDiagnostics (imu_samples .. iterated_updates) are its leading
 // uint32_t fields: `reset stats` keeps their values as an array and subtracts
 // it in one loop (flash on the M4F).
 static_assert(offsetof(NavDiagnostics, imu_samples) == 0 &&
-                  offsetof(NavDiagnostics, operator_resets) == (App::kNavCounters - 1) * sizeof(uint32_t),
+                  offsetof(NavDiagnostics, iterated_updates) == (App::kNavCounters - 1) * sizeof(uint32_t),
               "NavDiagnostics counters are no longer the leading uint32_t fields");
 
 void App::reset_stats() {

@@ -83,7 +83,7 @@ class App {
   void reset_stats();
   // The navigator's diagnostics with its counters taken since the last reset_stats().
   NavDiagnostics nav_counters() const;
-  static constexpr size_t kNavCounters = 11;  // leading uint32_t counters of NavDiagnostics
+  static constexpr size_t kNavCounters = 12;  // leading uint32_t counters of NavDiagnostics
 
   const AppStats& stats() const { return stats_; }
   const Navigator& navigator() const { return nav_; }

@@ -254,6 +254,7 @@ bool Console::step_stats(size_t step) {
       add(" imu_samples=%lu ranges_received=%lu ranges_used=%lu ranges_rejected=%lu", ul(dg.imu_samples),
           ul(dg.ranges_received), ul(dg.ranges_used), ul(dg.ranges_rejected));
       add_reset_fields(dg);
+      add(" iterated_updates=%lu", ul(dg.iterated_updates));
       // What the estimator learned on line (docs/ekf.md): the LOS ranging
       // 1-sigma and the gains on the gyro and accelerometer bias random walks.
       add_fixed(" uwb_sigma_m=", dg.uwb_sigma_m, 3);
