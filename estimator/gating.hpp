@@ -45,8 +45,10 @@ struct GatingDecision {
   bool use = true;           // fuse this range
   bool nlos = false;         // classified NLOS
   float r_scale = 1.0F;      // multiply nominal R by this (>= 1) when fused
-  float r_add_m2 = 0.0F;     // then add this to R [m^2] (a bound: the spread of the NLOS excess)
-  bool bound = false;        // fused as a bound: a short range classified NLOS (docs/nlos.md "Short ranges are bounds")
+  float r_add_m2 = 0.0F;     // then add this to R [m^2] (an NLOS range fused: the spread of its excess)
+  bool bound = false;        // an NLOS range fused: a short one as a bound, a long one on a starved geometry by
+                             // moment matching (docs/nlos.md); not learnt from (offsets, ranging noise)
+  float excess_m = 0.0F;     // expected NLOS excess subtracted from the range before it is fused [m]
   float p_svm = kNaNf;       // p1, NaN if not computed
   float p_mc = kNaNf;        // p2, NaN if not computed
   float p_fused = kNaNf;     // R of eq. 8 or the policy's final NLOS probability

@@ -836,8 +836,9 @@ RangeReport Navigator::on_range(const UwbRange& range) {
     const bool learn_offsets = nominal && moving && central && !escape && !d.bound;
     const Real r_add = std::isfinite(d.r_add_m2) && d.r_add_m2 > 0.0F ? static_cast<Real>(d.r_add_m2) : Real(0);
     const Real r_var = r_nom * scale + r_add;
-    const Real innov_fused =
-        iterated_range_innovation(pred, static_cast<Real>(range.range_m), innov, hph, r_var, ti, ai, dt_r, es);
+    const Real excess = std::isfinite(d.excess_m) ? static_cast<Real>(d.excess_m) : Real(0);
+    const Real innov_fused = iterated_range_innovation(pred, static_cast<Real>(range.range_m) - excess, innov - excess,
+                                                       hph, r_var, ti, ai, dt_r, es);
     used = ekf_.update_prepared(innov_fused, r_var, !learn_offsets).applied;
   }
   gating_.on_result(ctx, d, used);

@@ -13,6 +13,15 @@ namespace uwbnav {
 
 namespace {
 
+// Long NLOS ranges on a starved geometry (decide_default): the window in which
+// the other anchors' latest ranges count [us], how many of them must have been
+// heard in line of sight for NLOS ranges to be dropped, and how far the
+// filter's own range variance must exceed the NLOS excess scale mu^2 (4: its
+// range sigma above 2 mu, so that the mixture's mean shift is small against it).
+constexpr uint64_t kGeometryWindowUs = 1000000;
+constexpr int kMinLosAnchors = 2;
+constexpr float kMomentUncertainty = 4.0F;
+
 GatingPolicy policy_from_param(float value) {
   const long v = std::lround(value);
   if (v < 0 || v > static_cast<long>(GatingPolicy::kDefault)) return GatingPolicy::kDefault;
@@ -128,6 +137,18 @@ GatingAnchorStats GatingLayer::anchor_stats(size_t anchor_index) const {
     }
   }
   return sum;
+}
+
+int GatingLayer::los_anchors_heard(const RangeContext& ctx, size_t self) const {
+  const size_t tag_index = self % kMaxTags;
+  int n = 0;
+  for (size_t a = 0; a < site_.num_anchors && a < kMaxAnchors; ++a) {
+    const size_t i = a * kMaxTags + tag_index;
+    const Slot& s = slots_[i];
+    if (i == self || !s.has_last || s.last_nlos || ctx.range.t_us - s.last_t_us > kGeometryWindowUs) continue;
+    ++n;
+  }
+  return n;
 }
 
 int GatingLayer::slot_index(const RangeContext& ctx) const {
@@ -360,11 +381,28 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
                              ctx.innovation_m < 0.0F &&
                              ctx.innovation_m > -innov_gate_sigma_ * sqrt_s;
   const bool uncertain = ctx.innovation_var_m2 - ctx.meas_var_m2 > nlos_bias_m_ * nlos_bias_m_;
+  // Long ranges on a starved geometry (docs/nlos.md "Long NLOS ranges on a
+  // starved geometry"): where fewer than two other anchors of this tag were
+  // heard in line of sight within kGeometryWindowUs, dropping every NLOS range
+  // leaves the position unobservable across the remaining lines of sight and
+  // the filter drifts along a range circle. While the filter's own range
+  // uncertainty (S - R) exceeds the NLOS excess scale by kMomentUncertainty,
+  // a long NLOS range inside the gate is fused by moment matching of the
+  // two-class mixture instead: shortened by the expected excess p mu, its
+  // variance widened by the excess's spread p (2 - p) mu^2 (as the bounds).
+  const bool long_in_gate = std::isfinite(ctx.innovation_m) && ctx.innovation_var_m2 > 0.0F &&
+                            ctx.innovation_m >= 0.0F && ctx.innovation_m < innov_gate_sigma_ * sqrt_s;
+  const bool very_uncertain =
+      ctx.innovation_var_m2 - ctx.meas_var_m2 > kMomentUncertainty * nlos_bias_m_ * nlos_bias_m_;
+  const bool moment = d.nlos && !gross && long_in_gate && very_uncertain &&
+                      los_anchors_heard(ctx, static_cast<size_t>(&slot - slots_)) < kMinLosAnchors;
   d.bound = d.nlos && !gross && short_in_gate && uncertain;
-  d.use = !d.nlos || d.bound;
-  if (d.bound) {
+  d.use = !d.nlos || d.bound || moment;
+  if (d.bound || moment) {
     const float p = std::fmin(std::fmax(posterior, 0.0F), 1.0F);
     d.r_add_m2 = p * (2.0F - p) * nlos_bias_m_ * nlos_bias_m_;
+    if (moment) d.excess_m = p * nlos_bias_m_;
+    d.bound = true;  // not learnt from: offsets and noise see trusted ranges only
   } else if (d.use) {
     // Seed 003 inflation for accepted ranges with a large normalised residual.
     const float factor = residual_inflation_factor(e.z, resid_th_, resid_beta_);
@@ -412,6 +450,7 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
       d.use = std::isfinite(ctx.innovation_m) && !channel_nlos && (in_gate || admit_all);
       d.bound = false;
       d.r_add_m2 = 0.0F;
+      d.excess_m = 0.0F;
       if (d.use) {
         const float factor = residual_inflation_factor(z, resid_th_, resid_beta_);
         d.r_scale = std::isfinite(factor) ? std::fmax(factor, escape_r_scale_) : escape_r_scale_;

@@ -97,6 +97,9 @@ class GatingLayer {
   };
 
   int slot_index(const RangeContext& ctx) const;
+  // Other anchors of slot self's tag whose latest range, within
+  // kGeometryWindowUs of this one, was classified line of sight.
+  [[nodiscard]] int los_anchors_heard(const RangeContext& ctx, size_t self) const;
   float sigma_uwb_m(const RangeContext& ctx) const;
   Evidence compute_evidence(const RangeContext& ctx, const Slot& slot) const;
   float svm_p(const SvmModel* model, const Evidence& e, const RangeContext& ctx) const;

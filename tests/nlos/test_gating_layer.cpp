@@ -359,8 +359,9 @@ TEST(GatingLayer, DefaultFusesAShortNlosRangeOfAnUncertainFilterAsABound) {
   // A range classified NLOS (channel evidence) that is shorter than predicted:
   // NLOS only lengthens, so the true distance is at most the range. An uncertain
   // filter (predicted-range variance above nlos_bias_m^2) fuses it as that bound
-  // with the NLOS excess spread added to R; a long one, a converged filter's and
-  // one beyond the gate stay out.
+  // with the NLOS excess spread added to R; a long one (here with S - R below
+  // the starved-geometry threshold 4 mu^2, see the next test), a converged
+  // filter's and one beyond the gate stay out.
   GatingLayer g;
   Params p = params_with(GatingPolicy::kDefault);
   ASSERT_TRUE(ok(p.set(ParamId::kGateEscapeS, 0.0F)));  // robust mode off: gating only
@@ -381,7 +382,7 @@ TEST(GatingLayer, DefaultFusesAShortNlosRangeOfAnUncertainFilterAsABound) {
   const float q = bound.p_fused;
   EXPECT_NEAR(bound.r_add_m2, q * (2.0F - q) * mu * mu, 1e-6F);
   EXPECT_GT(bound.r_add_m2, 0.5F * mu * mu);
-  const GatingDecision long_range = g.assess(nlos_ctx(1, 0, +1.0F, 1.0F));
+  const GatingDecision long_range = g.assess(nlos_ctx(1, 0, +1.0F, 0.8F));
   EXPECT_FALSE(long_range.use);
   EXPECT_FALSE(long_range.bound);
   const GatingDecision converged = g.assess(nlos_ctx(2, 0, -0.1F, 0.02F));  // S - R = 0.01 m^2 < mu^2
@@ -390,6 +391,70 @@ TEST(GatingLayer, DefaultFusesAShortNlosRangeOfAnUncertainFilterAsABound) {
   const GatingDecision beyond = g.assess(nlos_ctx(3, 0, -6.0F, 1.0F));  // -6 sigma: past the gate
   EXPECT_FALSE(beyond.use);
   EXPECT_FALSE(beyond.bound);
+}
+
+TEST(GatingLayer, DefaultFusesALongNlosRangeByMomentMatchingOnlyOnAStarvedGeometry) {
+  // Measured on held-out drive ground_blocked:91: two anchors blocked, a third
+  // NLOS behind the body; dropping that third anchor's ranges left one line of
+  // sight and the filter slid 16 m along its range circle. A long NLOS range
+  // inside the gate is fused, shortened by the expected excess p mu and with
+  // the excess spread p (2 - p) mu^2 added to R, when (1) fewer than two other
+  // anchors of the tag were heard in line of sight within the last second and
+  // (2) the filter's own range variance S - R exceeds 4 mu^2. Otherwise it stays out.
+  Params p = params_with(GatingPolicy::kDefault);
+  ASSERT_TRUE(ok(p.set(ParamId::kGateEscapeS, 0.0F)));  // robust mode off: gating only
+  const float mu = p[ParamId::kGateNlosBias];
+  auto nlos_ctx = [](int a, uint64_t t_us, float innovation_m, float innovation_var_m2) {
+    RangeContext c = ctx_at(a, t_us, 20.0F + innovation_m, innovation_m, false);
+    c.innovation_var_m2 = innovation_var_m2;
+    c.range.fp_power_dbm = -95.0F;
+    c.range.rx_power_dbm = -80.0F;  // 15 dB gap: classic NLOS signature
+    return c;
+  };
+  auto los_ctx = [](int a, uint64_t t_us) {
+    RangeContext c = ctx_at(a, t_us, 20.0F, 0.0F, false);
+    c.innovation_var_m2 = 3.0F;
+    return c;
+  };
+  const float s_uncertain = 3.0F;  // S - R = 2.99 m^2 > 4 mu^2 = 1 m^2
+  {
+    // Nothing else heard: starved.
+    GatingLayer g;
+    ASSERT_TRUE(ok(g.configure(make_site(), p)));
+    const GatingDecision d = g.assess(nlos_ctx(0, 1000000, +1.0F, s_uncertain));
+    EXPECT_TRUE(d.nlos);
+    ASSERT_TRUE(d.use);
+    EXPECT_TRUE(d.bound);  // not learnt from
+    const float q = d.p_fused;
+    EXPECT_NEAR(d.excess_m, q * mu, 1e-6F);
+    EXPECT_NEAR(d.r_add_m2, q * (2.0F - q) * mu * mu, 1e-6F);
+    EXPECT_GT(d.excess_m, 0.5F * mu);
+    // The same range from a filter whose range sigma is below 2 mu stays out.
+    const GatingDecision tight = g.assess(nlos_ctx(0, 1100000, +0.5F, 0.8F));
+    EXPECT_FALSE(tight.use);
+    EXPECT_FLOAT_EQ(tight.excess_m, 0.0F);
+  }
+  {
+    // Two other anchors heard in line of sight within the second: dropped.
+    GatingLayer g;
+    ASSERT_TRUE(ok(g.configure(make_site(), p)));
+    ASSERT_FALSE(g.assess(los_ctx(1, 1000000)).nlos);
+    ASSERT_FALSE(g.assess(los_ctx(2, 1200000)).nlos);
+    const GatingDecision d = g.assess(nlos_ctx(0, 1900000, +1.0F, s_uncertain));
+    EXPECT_TRUE(d.nlos);
+    EXPECT_FALSE(d.use);
+    EXPECT_FLOAT_EQ(d.excess_m, 0.0F);
+    // One of them older than a second: starved again, fused.
+    const GatingDecision later = g.assess(nlos_ctx(0, 2100000, +1.0F, s_uncertain));
+    EXPECT_TRUE(later.use);
+    EXPECT_GT(later.excess_m, 0.0F);
+  }
+  {
+    // Beyond the gate (5 sigma of S) a long range stays out whatever the geometry.
+    GatingLayer g;
+    ASSERT_TRUE(ok(g.configure(make_site(), p)));
+    EXPECT_FALSE(g.assess(nlos_ctx(0, 1000000, +9.0F, s_uncertain)).use);
+  }
 }
 
 TEST(GatingLayer, UsedCountersFollowOnResult) {
