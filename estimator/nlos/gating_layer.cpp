@@ -450,7 +450,8 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
       d.use = std::isfinite(ctx.innovation_m) && !channel_nlos && (in_gate || admit_all);
       d.bound = false;
       d.r_add_m2 = 0.0F;
-      d.excess_m = 0.0F;
+      // excess_m stays: a long NLOS range of a starved geometry is still
+      // shortened by its expected excess, weighted as robust mode weighs.
       if (d.use) {
         const float factor = residual_inflation_factor(z, resid_th_, resid_beta_);
         d.r_scale = std::isfinite(factor) ? std::fmax(factor, escape_r_scale_) : escape_r_scale_;
