@@ -47,6 +47,17 @@ RangeContext ctx_at(int a, uint64_t t_us, float range_m, float innovation_m, boo
   return c;
 }
 
+// A range of anchor index a that the channel marks NLOS (15 dB gap between
+// first-path and total power, the classic signature), from a filter that is
+// not ready, with the given innovation and innovation variance S.
+RangeContext nlos_ctx(int a, uint64_t t_us, float innovation_m, float innovation_var_m2) {
+  RangeContext c = ctx_at(a, t_us, 20.0F + innovation_m, innovation_m, false);
+  c.innovation_var_m2 = innovation_var_m2;
+  c.range.fp_power_dbm = -95.0F;
+  c.range.rx_power_dbm = -80.0F;
+  return c;
+}
+
 TEST(GatingLayer, ConfigureVerifiesCommittedModels) {
   GatingLayer g;
   EXPECT_TRUE(ok(g.configure(make_site(), Params())));
@@ -367,13 +378,6 @@ TEST(GatingLayer, DefaultFusesAShortNlosRangeOfAnUncertainFilterAsABound) {
   ASSERT_TRUE(ok(p.set(ParamId::kGateEscapeS, 0.0F)));  // robust mode off: gating only
   ASSERT_TRUE(ok(g.configure(make_site(), p)));
   const float mu = p[ParamId::kGateNlosBias];
-  auto nlos_ctx = [](int a, uint64_t t_us, float innovation_m, float innovation_var_m2) {
-    RangeContext c = ctx_at(a, t_us, 20.0F + innovation_m, innovation_m, false);
-    c.innovation_var_m2 = innovation_var_m2;
-    c.range.fp_power_dbm = -95.0F;
-    c.range.rx_power_dbm = -80.0F;  // 15 dB gap: classic NLOS signature
-    return c;
-  };
   const GatingDecision bound = g.assess(nlos_ctx(0, 0, -1.0F, 1.0F));  // S - R = 0.99 m^2 > mu^2
   EXPECT_TRUE(bound.nlos);
   EXPECT_TRUE(bound.use);
@@ -404,13 +408,6 @@ TEST(GatingLayer, DefaultFusesALongNlosRangeByMomentMatchingOnlyOnAStarvedGeomet
   Params p = params_with(GatingPolicy::kDefault);
   ASSERT_TRUE(ok(p.set(ParamId::kGateEscapeS, 0.0F)));  // robust mode off: gating only
   const float mu = p[ParamId::kGateNlosBias];
-  auto nlos_ctx = [](int a, uint64_t t_us, float innovation_m, float innovation_var_m2) {
-    RangeContext c = ctx_at(a, t_us, 20.0F + innovation_m, innovation_m, false);
-    c.innovation_var_m2 = innovation_var_m2;
-    c.range.fp_power_dbm = -95.0F;
-    c.range.rx_power_dbm = -80.0F;  // 15 dB gap: classic NLOS signature
-    return c;
-  };
   auto los_ctx = [](int a, uint64_t t_us) {
     RangeContext c = ctx_at(a, t_us, 20.0F, 0.0F, false);
     c.innovation_var_m2 = 3.0F;
