@@ -3,6 +3,8 @@
 
 #include <cstring>
 
+#include "estimator/nlos/svm_model.hpp"
+
 namespace uwbnav {
 namespace {
 
@@ -23,14 +25,8 @@ uint32_t get_u32(const uint8_t* p) {
 
 }  // namespace
 
-uint32_t crc32_ieee(const uint8_t* data, size_t len) {
-  uint32_t crc = 0xFFFFFFFFU;
-  for (size_t i = 0; i < len; ++i) {
-    crc ^= data[i];
-    for (int b = 0; b < 8; ++b) crc = (crc >> 1) ^ (0xEDB88320U & (0U - (crc & 1U)));
-  }
-  return ~crc;
-}
+// The estimator's CRC-32 (estimator/nlos/svm_model.cpp), from the initial state.
+uint32_t crc32_ieee(const uint8_t* data, size_t len) { return crc32_update(0U, data, len); }
 
 size_t param_blob_write(const Params& params, uint8_t* buf, size_t cap) {
   if (cap < kParamBlobMaxBytes) return 0;

@@ -12,6 +12,21 @@ namespace {
 
 constexpr uint32_t kCrcPolyReflected = 0xEDB88320U;
 
+// CRC-32 four bits at a time: the register after shifting the nibble n
+// through the bitwise algorithm, for each n (16 x 4 B of flash against 1 KiB
+// for the byte table; 2 steps per byte instead of 8).
+struct CrcNibbleTable {
+  uint32_t v[16] = {};
+  constexpr CrcNibbleTable() {
+    for (uint32_t n = 0; n < 16U; ++n) {
+      uint32_t c = n;
+      for (int bit = 0; bit < 4; ++bit) c = (c & 1U) != 0U ? (c >> 1U) ^ kCrcPolyReflected : c >> 1U;
+      v[n] = c;
+    }
+  }
+};
+constexpr CrcNibbleTable kCrcNibble{};
+
 uint32_t crc_u32(uint32_t crc, uint32_t v, size_t bytes) {
   uint8_t buf[4];
   for (size_t i = 0; i < bytes; ++i) buf[i] = static_cast<uint8_t>((v >> (8U * i)) & 0xFFU);
@@ -132,9 +147,8 @@ uint32_t crc32_update(uint32_t crc, const uint8_t* data, size_t n) {
   crc = ~crc;
   for (size_t i = 0; i < n; ++i) {
     crc ^= data[i];
-    for (int bit = 0; bit < 8; ++bit) {
-      crc = (crc & 1U) != 0U ? (crc >> 1U) ^ kCrcPolyReflected : crc >> 1U;
-    }
+    crc = (crc >> 4U) ^ kCrcNibble.v[crc & 0xFU];
+    crc = (crc >> 4U) ^ kCrcNibble.v[crc & 0xFU];
   }
   return ~crc;
 }

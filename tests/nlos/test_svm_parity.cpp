@@ -324,6 +324,24 @@ TEST(SvmModelDefault, CommittedFileIsWhatTheExporterWritesForTheseModels) {
   EXPECT_NE(committed.str().find("do not edit"), std::string::npos);
 }
 
+TEST(Crc32, NibbleTableMatchesTheBitwiseDefinitionForEveryByteAndChunking) {
+  // Reference: the reflected CRC-32 one bit at a time (what the nibble table
+  // of svm_model.cpp precomputes).
+  auto bitwise = [](uint32_t crc, const uint8_t* d, size_t n) {
+    crc = ~crc;
+    for (size_t i = 0; i < n; ++i) {
+      crc ^= d[i];
+      for (int b = 0; b < 8; ++b) crc = (crc & 1U) != 0U ? (crc >> 1U) ^ 0xEDB88320U : crc >> 1U;
+    }
+    return ~crc;
+  };
+  uint8_t all[256];
+  for (int i = 0; i < 256; ++i) all[i] = static_cast<uint8_t>(255 - i);
+  for (int i = 0; i < 256; ++i) EXPECT_EQ(crc32_update(0x12345678U, &all[i], 1), bitwise(0x12345678U, &all[i], 1)) << i;
+  EXPECT_EQ(crc32_update(0, all, 256), bitwise(0, all, 256));
+  EXPECT_EQ(crc32_update(crc32_update(0, all, 100), all + 100, 156), crc32_update(0, all, 256));
+}
+
 TEST(Crc32, KnownCheckValue) {
   const uint8_t data[9] = {'1', '2', '3', '4', '5', '6', '7', '8', '9'};
   EXPECT_EQ(crc32_update(0, data, 9), 0xCBF43926U);
