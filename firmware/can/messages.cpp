@@ -354,15 +354,22 @@ int64_t read_raw(const SignalLayout& s, const uint8_t* data) {
   return static_cast<int64_t>(raw);
 }
 
+// Byte by byte: each step writes the bits of one payload byte, at most 9 steps
+// per signal instead of one per bit (the loop runs for every signal of every
+// frame sent, each cycle).
 void put_bits(uint8_t* data, uint8_t start_bit, uint8_t bit_len, uint64_t raw) {
-  for (uint8_t i = 0; i < bit_len; ++i) {
-    const unsigned bit = static_cast<unsigned>(start_bit) + i;
-    const auto mask = static_cast<uint8_t>(1U << (bit % 8));
-    if (((raw >> i) & 1U) != 0) {
-      data[bit / 8] = static_cast<uint8_t>(data[bit / 8] | mask);
-    } else {
-      data[bit / 8] = static_cast<uint8_t>(data[bit / 8] & ~mask);
-    }
+  unsigned bit = start_bit;
+  unsigned done = 0;
+  while (done < bit_len) {
+    const unsigned offset = bit % 8U;
+    const unsigned left = static_cast<unsigned>(bit_len) - done;
+    const unsigned n = (8U - offset < left) ? 8U - offset : left;
+    const auto mask = static_cast<uint8_t>(((1U << n) - 1U) << offset);
+    const uint64_t source = done < 64U ? raw >> done : 0U;  // bits past 64 are zero
+    const auto value = static_cast<uint8_t>(static_cast<unsigned>(source << offset) & mask);
+    data[bit / 8U] = static_cast<uint8_t>((data[bit / 8U] & ~mask) | value);
+    bit += n;
+    done += n;
   }
 }
 
@@ -374,9 +381,16 @@ uint64_t unwrap_time_us(uint32_t t32_us, uint64_t ref_us) {
 
 uint64_t get_bits(const uint8_t* data, uint8_t start_bit, uint8_t bit_len) {
   uint64_t raw = 0;
-  for (uint8_t i = 0; i < bit_len; ++i) {
-    const unsigned bit = static_cast<unsigned>(start_bit) + i;
-    if (((data[bit / 8] >> (bit % 8)) & 1U) != 0) raw |= (uint64_t{1} << i);
+  unsigned bit = start_bit;
+  unsigned done = 0;
+  while (done < bit_len && done < 64U) {
+    const unsigned offset = bit % 8U;
+    const unsigned left = static_cast<unsigned>(bit_len) - done;
+    const unsigned n = (8U - offset < left) ? 8U - offset : left;
+    const unsigned byte_bits = (static_cast<unsigned>(data[bit / 8U]) >> offset) & ((1U << n) - 1U);
+    raw |= static_cast<uint64_t>(byte_bits) << done;
+    bit += n;
+    done += n;
   }
   return raw;
 }

@@ -2,7 +2,9 @@
 // DBC resolution, saturation with the Saturated flag, non-finite handling.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <random>
 
@@ -25,6 +27,33 @@ TEST(CanBits, IntelOrderPutsLsbFirstAcrossByteBoundaries) {
   EXPECT_EQ(d[6], 0x34);
   EXPECT_EQ(d[7], 0x12);
   EXPECT_EQ(get_bits(d, 16, 48), 0x123456789ABCULL);
+}
+
+// The byte-wise put_bits/get_bits against the one-bit-at-a-time definition of
+// the Intel layout: every start bit and length a 64-byte payload admits, on a
+// random background that bits outside the signal must keep.
+TEST(CanBits, ByteWisePackingMatchesTheBitwiseDefinitionForEveryStartAndLength) {
+  std::mt19937_64 rng(7);
+  for (unsigned start = 0; start < 256; ++start) {
+    for (unsigned len = 1; len <= 64; ++len) {
+      uint8_t background[64];
+      for (auto& b : background) b = static_cast<uint8_t>(rng());
+      const uint64_t raw = len == 64 ? rng() : rng() & ((uint64_t{1} << len) - 1U);
+      uint8_t expected[64];
+      std::copy(std::begin(background), std::end(background), std::begin(expected));
+      for (unsigned i = 0; i < len; ++i) {
+        const unsigned bit = start + i;
+        const auto mask = static_cast<uint8_t>(1U << (bit % 8));
+        expected[bit / 8] = static_cast<uint8_t>(((raw >> i) & 1U) != 0 ? expected[bit / 8] | mask
+                                                                          : expected[bit / 8] & ~mask);
+      }
+      uint8_t got[64];
+      std::copy(std::begin(background), std::end(background), std::begin(got));
+      put_bits(got, static_cast<uint8_t>(start), static_cast<uint8_t>(len), raw);
+      ASSERT_TRUE(std::equal(std::begin(got), std::end(got), std::begin(expected))) << start << " " << len;
+      ASSERT_EQ(get_bits(got, static_cast<uint8_t>(start), static_cast<uint8_t>(len)), raw) << start << " " << len;
+    }
+  }
 }
 
 TEST(CanMessages, PosXyKnownFrameBytes) {
