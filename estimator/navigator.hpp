@@ -265,6 +265,9 @@ class Navigator {
   void yaw_bank_on_range(int anchor_index, int tag_index, const UwbRange& range);
   YawGsf::Noise yaw_bank_noise() const;
   Real levelled_tilt_sigma() const;
+  // True when the rest window's mean specific force lies along the vertical of
+  // the levelled, gyro-propagated attitude (imu_still: a new rest, not a steady acceleration).
+  bool force_along_levelled_vertical(uint64_t t_us) const;
   Vec3 levelled_gyro_bias_sigma() const;
   Status robust_ls_fix(LsRange* ranges, size_t n, const LsOptions& opt, LsFix& ls) const;
   void setup_height(Real origin_z_m);
@@ -391,6 +394,7 @@ class Navigator {
   RangeRateBlock range_rate_[kMaxAnchors];  // kept over restarts: the ranges, not the filter
   uint64_t first_range_t_us_ = 0;
   uint64_t first_imu_t_us_ = 0;
+  uint64_t levelled_t_us_ = 0;      // latest levelling from a window's mean specific force [us]
   bool levelled_ = false;
   bool levelled_at_rest_ = false;
   Quat q_init_ = Quat(1, 0, 0, 0);  // levelled attitude, yaw relative to the unknown start yaw
