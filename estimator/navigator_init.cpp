@@ -247,7 +247,7 @@ bool Navigator::force_along_levelled_vertical(uint64_t t_us) const {
   const Real sin_angle = (f / fn).cross(up_body).norm();
   const Real since_s = t_us > levelled_t_us_ ? static_cast<Real>(t_us - levelled_t_us_) * Real(1e-6) : Real(0);
   const Real allowed = Real(2) * levelled_tilt_sigma() + Real(3) * levelled_gyro_bias_sigma().maxCoeff() * since_s;
-  return sin_angle < std::sin(std::fmin(allowed, Real(1.5)));
+  return sin_angle < sin_cos(std::fmin(allowed, Real(1.5))).sin;
 }
 
 Real Navigator::speed_lower_bound(uint64_t t_us) const {
