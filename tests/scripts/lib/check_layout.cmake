@@ -14,6 +14,14 @@ foreach(f ${est})
     if(l MATCHES "^[ ]+static " AND NOT l MATCHES "[(]" AND NOT l MATCHES "static (constexpr|const|inline)")
       string(APPEND errors "${f}: function-local static (scratch belongs in the object): ${l}\n")
     endif()
+    # Sine and cosine through estimator/trig (sin_cos): libm's sinf/cosf bring
+    # the Payne-Hanek reduction into the M4F image (about 4 KB of flash).
+    # rtk_baseline.cpp is built only with UWBNAV_LAMBDA, which the M4F image leaves out.
+    string(REGEX REPLACE "//.*$" "" code "${l}")
+    if(NOT f MATCHES "/trig\\.(hpp|cpp)$" AND NOT f MATCHES "/rtk_baseline\\.cpp$" AND
+       code MATCHES "(std::(sin|cos|tan)|[^a-z_:](sinf|cosf|tanf))[(]")
+      string(APPEND errors "${f}: libm sine/cosine (use sin_cos from estimator/trig.hpp): ${l}\n")
+    endif()
   endforeach()
 endforeach()
 foreach(f ${fw})
