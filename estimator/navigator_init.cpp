@@ -243,7 +243,7 @@ bool Navigator::force_along_levelled_vertical(uint64_t t_us) const {
   const Vec3 f = rest_.accel_mean();
   const Real fn = f.norm();
   if (!(fn > Real(0))) return false;
-  const Vec3 up_body = quat_to_dcm(q_init_).transpose() * Vec3(0, 0, 1);
+  const Vec3 up_body = quat_to_dcm(q_init_).row(2).transpose();  // nav up in the body frame
   const Real sin_angle = (f / fn).cross(up_body).norm();
   const Real since_s = t_us > levelled_t_us_ ? static_cast<Real>(t_us - levelled_t_us_) * Real(1e-6) : Real(0);
   const Real allowed = Real(2) * levelled_tilt_sigma() + Real(3) * levelled_gyro_bias_sigma().maxCoeff() * since_s;

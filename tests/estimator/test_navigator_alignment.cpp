@@ -115,18 +115,12 @@ TEST(NavigatorAlignment, APullAwayWithOneLineOfSightLeftKeepsItsNlosRangesByMome
 
 // Angle between the body z axes of two body->nav quaternions (scalar first) [deg].
 double tilt_between_deg(const float q_est[4], const double q_true[4]) {
-  const auto z_axis = [](double w, double x, double y, double z, double out[3]) {
-    out[0] = 2.0 * (x * z + w * y);
-    out[1] = 2.0 * (y * z - w * x);
-    out[2] = 1.0 - 2.0 * (x * x + y * y);
-  };
-  double a[3], b[3];
-  z_axis(static_cast<double>(q_est[0]), static_cast<double>(q_est[1]), static_cast<double>(q_est[2]),
-         static_cast<double>(q_est[3]), a);
-  z_axis(q_true[0], q_true[1], q_true[2], q_true[3], b);
-  const double c = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) /
-                   (std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]) * std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]));
-  return std::acos(std::fmin(std::fmax(c, -1.0), 1.0)) * 180.0 / 3.14159265358979;
+  const Vec3 z_est = quat_to_dcm(Quat(q_est[0], q_est[1], q_est[2], q_est[3])).col(2);
+  const Vec3 z_true = quat_to_dcm(Quat(static_cast<Real>(q_true[0]), static_cast<Real>(q_true[1]),
+                                       static_cast<Real>(q_true[2]), static_cast<Real>(q_true[3])))
+                          .col(2);
+  const Real c = z_est.dot(z_true) / (z_est.norm() * z_true.norm());
+  return static_cast<double>(std::acos(std::fmin(std::fmax(c, Real(-1)), Real(1))) * Real(180) / kPi);
 }
 
 TEST(NavigatorAlignment, APullAwayIsNotLevelledAsANewRestBeforeTheHandOver) {
