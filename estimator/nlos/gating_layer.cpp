@@ -344,14 +344,19 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
   // The chain's stationary NLOS probability bounds the prediction from below:
   // a long line-of-sight history cannot make the pair arbitrarily trusted.
   const float p_stationary = nlos_episode_s_ / (nlos_episode_s_ + los_episode_s_);
-  float prior = p_stationary;
-  if (slot.has_p_nlos && ctx.range.t_us >= slot.p_nlos_t_us) {
+  const bool step = slot.has_p_nlos && ctx.range.t_us >= slot.p_nlos_t_us;
+  float stay = 0.0F;   // P(NLOS -> NLOS) over the time since the pair's previous range
+  float enter = 1.0F;  // P(LOS -> NLOS) over it
+  if (step) {
     const uint64_t dt_us = ctx.range.t_us - slot.p_nlos_t_us;
     const float dt_s = static_cast<float>(static_cast<uint32_t>(dt_us < 4000000000ULL ? dt_us : 4000000000ULL)) * 1e-6F;
-    const float stay = std::exp(-dt_s / nlos_episode_s_);
-    const float enter = 1.0F - std::exp(-dt_s / los_episode_s_);
-    prior = std::fmax(slot.p_nlos * stay + (1.0F - slot.p_nlos) * enter, p_stationary);
+    stay = std::exp(-dt_s / nlos_episode_s_);
+    enter = 1.0F - std::exp(-dt_s / los_episode_s_);
   }
+  const auto predict = [&](float p) {
+    return step && std::isfinite(p) ? std::fmax(p * stay + (1.0F - p) * enter, p_stationary) : p_stationary;
+  };
+  const float prior = predict(slot.p_nlos);
   const float posterior = std::isfinite(r) ? ds_combine(r, prior) : prior;
   d.nlos = gross || posterior > default_nlos_;
   // Held: the evidence alone says line of sight, the episode says not yet.
@@ -362,6 +367,15 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
   // A range fused although it may be NLOS weighs by its probability of line of
   // sight: R / (1 - p), the expected weight of the two-class mixture (EM).
   const float los_weight_scale = posterior < 0.99F ? 1.0F / (1.0F - posterior) : 100.0F;
+  // The channel-only belief that robust mode reads: the same chain on the same
+  // clock, fed by the fp/rx power gap alone (filter-independent). One range's
+  // gap is noisy, and a range of an NLOS episode that reads line-of-sight-like
+  // (the channel then says nothing: p = 0.5) stays NLOS until the chain lets
+  // the episode end. NaN while the radio never reported a channel for the pair.
+  if (std::isfinite(e.p_chan) || std::isfinite(slot.p_chan_nlos)) {
+    const float chan_prior = predict(slot.p_chan_nlos);
+    slot.p_chan_nlos = std::isfinite(e.p_chan) ? std::fmin(ds_combine(e.p_chan, chan_prior), kBeliefClip) : chan_prior;
+  }
   slot.p_nlos_t_us = ctx.range.t_us;
   slot.has_p_nlos = true;
   slot.nlos_state = d.nlos;
@@ -455,6 +469,11 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
       if (d.use) {
         const float factor = residual_inflation_factor(z, resid_th_, resid_beta_);
         d.r_scale = std::isfinite(factor) ? std::fmax(factor, escape_r_scale_) : escape_r_scale_;
+        // A pair in a channel NLOS episode weighs by the episode's probability
+        // of line of sight, R / (1 - p), as a fused range does outside robust mode.
+        if (slot.p_chan_nlos > default_nlos_) {
+          d.r_scale = std::fmax(d.r_scale, slot.p_chan_nlos < 0.99F ? 1.0F / (1.0F - slot.p_chan_nlos) : 100.0F);
+        }
         ++slot.stats.escape_count;
         if (in_gate) last_pass_t_us_ = ctx.range.t_us;
       }

@@ -78,6 +78,11 @@ class GatingLayer {
     // posterior NLOS probability after the pair's latest range and its time.
     uint64_t p_nlos_t_us = 0;
     float p_nlos = 0.5F;
+    // The same chain on the same clock (p_nlos_t_us), fed by the channel
+    // evidence alone (fp/rx power gap): the filter-independent NLOS belief
+    // that robust mode reads [-]. NaN until the radio reported a channel for
+    // this pair.
+    float p_chan_nlos = kNaNf;
     bool has_p_nlos = false;
     bool nlos_state = false;
     bool has_prev = false;

@@ -283,6 +283,48 @@ TEST(GatingLayer, DefaultEscapeReadmitsDriftedFilter) {
   EXPECT_FALSE(g.escape_active());
 }
 
+TEST(GatingLayer, RobustModeWeighsARangeByItsPairsChannelEpisodeNotByItsOwnGapAlone) {
+  // Robust mode ignores the filter-derived evidence but not the channel: a
+  // range whose own fp/rx power gap reads line-of-sight-like, from a pair the
+  // channel showed NLOS a moment ago, is still in that NLOS episode (one
+  // range's gap is noisy). It is fused with R / (1 - p) of the channel-only
+  // episode, not at the plain robust weight (tuning drive ground_blocked:58:
+  // two anchors heard, both NLOS, their few LOS-looking gaps let 2 m long
+  // ranges in at 4 R, 3.5 m off).
+  GatingLayer g;
+  ASSERT_TRUE(ok(g.configure(make_site(), params_with(GatingPolicy::kDefault))));
+  uint64_t t = 0;
+  feed(g, t, 200, 0.02F);
+  feed(g, t, 40, -3.0F);  // a drifted filter: robust mode
+  ASSERT_TRUE(g.escape_active());
+  // Anchor 0 in a channel NLOS episode (15 dB gap), 0.5 s of ranges: the
+  // channel flags every one, robust mode or not.
+  for (int k = 0; k < 25; ++k) {
+    RangeContext c = ctx_at(0, t, 20.02F, 0.02F);
+    c.range.fp_power_dbm = -95.0F;
+    c.range.rx_power_dbm = -80.0F;
+    const GatingDecision d = g.assess(c);
+    g.on_result(c, d, d.use);
+    EXPECT_FALSE(d.use);
+    t += 20000;
+  }
+  ASSERT_TRUE(g.escape_active());
+  // 20 ms later both anchors 0 and 1 read a neutral 2 dB gap, innovation z = 0.14.
+  RangeContext in_episode = ctx_at(0, t, 20.02F, 0.02F);
+  in_episode.range.fp_power_dbm = -82.0F;
+  in_episode.range.rx_power_dbm = -80.0F;
+  RangeContext fresh = ctx_at(1, t + 1000, 20.02F, 0.02F);
+  fresh.range.fp_power_dbm = -82.0F;
+  fresh.range.rx_power_dbm = -80.0F;
+  const GatingDecision d_episode = g.assess(in_episode);
+  const GatingDecision d_fresh = g.assess(fresh);
+  ASSERT_TRUE(g.escape_active());
+  EXPECT_TRUE(d_fresh.use);
+  EXPECT_FLOAT_EQ(d_fresh.r_scale, 4.0F);  // gate.escape_r_scale
+  EXPECT_TRUE(d_episode.use);
+  EXPECT_GE(d_episode.r_scale, 20.0F);  // p >= 0.95 after 0.5 s of 15 dB gaps and 20 ms
+}
+
 TEST(GatingLayer, DefaultRejectsGrossOutlierDespiteLosEvidence) {
   GatingLayer g;
   Params p = params_with(GatingPolicy::kDefault);
