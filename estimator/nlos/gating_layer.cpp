@@ -35,6 +35,11 @@ float distance_m(const Vec3f& a, const Vec3f& b) {
   return std::sqrt(dx * dx + dy * dy + dz * dz);
 }
 
+// The R scale of a range fused although it may be NLOS with probability p:
+// R / (1 - p), the expected line-of-sight weight of the two-class mixture (EM),
+// at most 100 R (p >= 0.99).
+float los_weight_r_scale(float p_nlos) { return p_nlos < 0.99F ? 1.0F / (1.0F - p_nlos) : 100.0F; }
+
 // Innovation evidence of the default policy (docs/nlos.md "Innovation evidence"):
 // the likelihood ratio of the innovation nu under NLOS, where the range carries
 // a positive excess b ~ Exp(mean mu) on top of the LOS error N(0, S) (an
@@ -364,9 +369,8 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
   // The stored belief stays away from certainty so that the chain can turn.
   constexpr float kBeliefClip = 0.999F;
   slot.p_nlos = d.nlos ? std::fmin(std::fmax(posterior, default_nlos_), kBeliefClip) : std::fmin(posterior, default_nlos_);
-  // A range fused although it may be NLOS weighs by its probability of line of
-  // sight: R / (1 - p), the expected weight of the two-class mixture (EM).
-  const float los_weight_scale = posterior < 0.99F ? 1.0F / (1.0F - posterior) : 100.0F;
+  // A range fused although it may be NLOS weighs by its probability of line of sight.
+  const float los_weight_scale = los_weight_r_scale(posterior);
   // The channel-only belief that robust mode reads: the same chain on the same
   // clock, fed by the fp/rx power gap alone (filter-independent). One range's
   // gap is noisy, and a range of an NLOS episode that reads line-of-sight-like
@@ -472,7 +476,7 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
         // A pair in a channel NLOS episode weighs by the episode's probability
         // of line of sight, R / (1 - p), as a fused range does outside robust mode.
         if (slot.p_chan_nlos > default_nlos_) {
-          d.r_scale = std::fmax(d.r_scale, slot.p_chan_nlos < 0.99F ? 1.0F / (1.0F - slot.p_chan_nlos) : 100.0F);
+          d.r_scale = std::fmax(d.r_scale, los_weight_r_scale(slot.p_chan_nlos));
         }
         ++slot.stats.escape_count;
         if (in_gate) last_pass_t_us_ = ctx.range.t_us;
