@@ -44,10 +44,18 @@ step "footprint report (targets of issue 4)" bash scripts/footprint.sh --check "
 step "aarch64 configure" cmake --preset aarch64 -B "$a64"
 # The build preset's targets and the test preset's exclusion filter, applied to
 # whichever tree was configured.
-read -r -a a64_targets <<< "$(/usr/bin/python3 -c 'import json; p = json.load(open("CMakePresets.json"));
-print(" ".join(next(b["targets"] for b in p["buildPresets"] if b["name"] == "aarch64")))')"
-exclude=$(/usr/bin/python3 -c 'import json; p = json.load(open("CMakePresets.json"));
-print(next(t["filter"]["exclude"]["name"] for t in p["testPresets"] if t["name"] == "aarch64"))')
+exclude=""
+a64_targets=()
+{
+  read -r exclude
+  read -r -a a64_targets
+} < <(/usr/bin/python3 -c 'import json; p = json.load(open("CMakePresets.json"))
+print(next(t["filter"]["exclude"]["name"] for t in p["testPresets"] if t["name"] == "aarch64"))
+print(" ".join(next(b["targets"] for b in p["buildPresets"] if b["name"] == "aarch64")))')
+if [[ -z "${exclude:-}" || ${#a64_targets[@]} -eq 0 ]]; then
+  echo "ci_cross: CMakePresets.json has no aarch64 build targets or test filter"
+  exit 1
+fi
 step "aarch64 build" cmake --build "$a64" --target "${a64_targets[@]}"
 step "aarch64 tests (qemu-aarch64)" ctest --test-dir "$a64" -j2 --output-on-failure -E "$exclude"
 
