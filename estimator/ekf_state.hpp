@@ -59,6 +59,7 @@ static_assert(ErrIdx::kScale == ErrIdx::kCore && ErrIdx::kTagBias == ErrIdx::kSc
 
 constexpr int kN = ErrIdx::kSize;
 
+using Vec2 = Eigen::Matrix<Real, 2, 1>;
 using Vec3 = Eigen::Matrix<Real, 3, 1>;
 using Mat3 = Eigen::Matrix<Real, 3, 3>;
 using Quat = Eigen::Matrix<Real, 4, 1>;  // w, x, y, z (scalar first)

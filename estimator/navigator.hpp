@@ -268,6 +268,7 @@ class Navigator {
   // True when the rest window's mean specific force lies along the vertical of
   // the levelled, gyro-propagated attitude (imu_still: a new rest, not a steady acceleration).
   bool force_along_levelled_vertical(uint64_t t_us) const;
+  bool moved_since_rest(uint64_t t_us) const;
   Vec3 levelled_gyro_bias_sigma() const;
   Status robust_ls_fix(LsRange* ranges, size_t n, const LsOptions& opt, LsFix& ls) const;
   void setup_height(Real origin_z_m);
@@ -406,6 +407,9 @@ class Navigator {
   Vec3 rest_ref_gyro_body_radps_ = Vec3::Zero();  // mean gyro when rest was confirmed (body) [rad/s]
   bool imu_still_now_ = false;        // result of the latest rest check (init_on_imu, constraint rate)
   bool rest_ref_valid_ = false;       // a confirmed rest is held (rest_ref_* are its references)
+  bool dv_rest_valid_ = false;        // dv_rest_lvl_mps_ has integrated every IMU sample since the latest rest (ground)
+  Vec2 dv_rest_lvl_mps_ = Vec2::Zero();  // IMU velocity change since the latest rest, levelled frame (relative yaw) [m/s]
+  Real turn_rest_rad_ = Real(0);      // rotation of the body since the latest rest (sum of |gyro - bias| dt) [rad]
   TrackFix track_[kTrackCapacity];
   size_t track_head_ = 0;
   size_t track_count_ = 0;

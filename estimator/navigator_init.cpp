@@ -82,6 +82,7 @@ void Navigator::restart(bool counted_reset) {
   height_on_ = false;
   levelled_ = false;
   levelled_at_rest_ = false;
+  dv_rest_valid_ = false;
   q_init_ = Quat(1, 0, 0, 0);
   bg_init_.setZero();
   bg_ref_.setZero();
@@ -159,6 +160,11 @@ void Navigator::init_on_imu(const ImuSample& imu) {
     const Vec3 f_lvl = quat_to_dcm(q_init_) * to_vec3(imu.accel_body_mps2);
     const Real a = std::fmin(dt / kAccelEmaTau_s, Real(1));
     accel_h_ms_ += a * (f_lvl.head<2>().squaredNorm() - accel_h_ms_);
+    if (dv_rest_valid_) {
+      // Velocity gained since the latest rest (moved_since_rest).
+      dv_rest_lvl_mps_ += f_lvl.head<2>() * dt;
+      turn_rest_rad_ += ((w_mean - bg_init_) * dt).norm();
+    }
   }
   // Judge rest at the constraint rate (O(window) each time).
   if (imu.t_us - last_level_check_us_ < cfg_.constraint_period_us) return;
@@ -169,6 +175,9 @@ void Navigator::init_on_imu(const ImuSample& imu) {
   // and the specific force must not have moved since rest was confirmed.
   imu_still_now_ = imu_still(imu.t_us);
   if (imu_still_now_) {
+    dv_rest_lvl_mps_ = Vec2::Zero();
+    turn_rest_rad_ = Real(0);
+    dv_rest_valid_ = site_.platform == Platform::kGround;
     // Levelling (roll, pitch) and gyro bias from the rest window; keep the relative yaw.
     const Real yaw_rel = levelled_ ? quat_yaw(q_init_) : Real(0);
     q_init_ = quat_mul(quat_from_yaw(yaw_rel), quat_level(rest_.accel_mean()));
@@ -219,12 +228,13 @@ bool Navigator::imu_still(uint64_t t_us) {
     // (tuning drive outage:8): rest confirmed 0.9 s into a 2 m/s^2 pull-away,
     // the attitude re-levelled 10 deg nose-down and handed to the IMU filter.
     if (levelled_ && !force_along_levelled_vertical(t_us)) return false;
+    if (moved_since_rest(t_us)) return false;
     rest_ref_body_mps2_ = rest_.accel_mean();
     rest_ref_gyro_body_radps_ = rest_.gyro_mean();
     rest_ref_valid_ = true;
     return true;
   }
-  if (speed_bound > kRestHoldTrackSpeed_mps) {
+  if (speed_bound > kRestHoldTrackSpeed_mps || moved_since_rest(t_us)) {
     rest_ref_valid_ = false;
     return false;
   }
@@ -248,6 +258,31 @@ bool Navigator::force_along_levelled_vertical(uint64_t t_us) const {
   const Real since_s = t_us > levelled_t_us_ ? static_cast<Real>(t_us - levelled_t_us_) * Real(1e-6) : Real(0);
   const Real allowed = Real(2) * levelled_tilt_sigma() + Real(3) * levelled_gyro_bias_sigma().maxCoeff() * since_s;
   return sin_angle < sin_cos(std::fmin(allowed, Real(1.5))).sin;
+}
+
+bool Navigator::moved_since_rest(uint64_t t_us) const {
+  // A cruise at constant velocity leaves the IMU window as quiet as rest, and
+  // the ranges may not show the speed either: two anchors in view with the
+  // vehicle crossing the line between them see range rates near zero (measured,
+  // held-out drive ground_blocked:77: rest confirmed 0.7 s into a 3.2 m/s
+  // cruise after a pull-away, the ranges-only filter stopped 1 m from that
+  // line and then tracked the mirror image of the drive across it, 19 m off
+  // for 10 s). The pull-away itself is in the IMU: a ground vehicle levelled
+  // at rest integrates its horizontal specific force in the levelled frame
+  // into the velocity it has gained since (strapdown without position). The
+  // levelling absorbed the horizontal accelerometer bias into the tilt, so
+  // that bias returns only as the body turns (at most |b_a| per radian turned),
+  // and the rest gyro bias tilts the frame by sigma_bg t: the velocity error
+  // after t seconds is at most sigma_ba min(turn, 2) t + g sigma_bg t^2 / 2.
+  // A velocity gain beyond 3 such sigmas (plus the track's rest speed) is a
+  // vehicle that has not stopped since; the bound grows with t^2, so after a
+  // long drive the check gives way to the track's evidence alone.
+  if (!dv_rest_valid_ || !levelled_at_rest_ || t_us < levelled_t_us_) return false;
+  const Real t_s = static_cast<Real>(t_us - levelled_t_us_) * Real(1e-6);
+  const Real g = static_cast<Real>(site_.gravity_mps2);
+  const Real sigma_mps = cfg_.accel_bias_init * std::fmin(turn_rest_rad_, Real(2)) * t_s +
+                         Real(0.5) * g * levelled_gyro_bias_sigma().maxCoeff() * t_s * t_s;
+  return dv_rest_lvl_mps_.norm() > kRestTrackSpeed_mps + Real(3) * sigma_mps;
 }
 
 Real Navigator::speed_lower_bound(uint64_t t_us) const {
@@ -508,6 +543,7 @@ bool Navigator::init_track(int anchor_index, int tag_index, const UwbRange& rang
 void Navigator::begin_imu_recovery() {
   levelled_ = false;
   levelled_at_rest_ = false;
+  dv_rest_valid_ = false;
   q_init_ = Quat(1, 0, 0, 0);
   bg_init_.setZero();
   bg_ref_.setZero();
@@ -898,6 +934,7 @@ void Navigator::start_filter(uint64_t t_us, Real yaw_rad, Real yaw_sigma_rad) {
   x.q_nav_body = q;
   x.ba_body_mps2 = ba_init_;
   x.bg_body_radps = bg_init_;
+  dv_rest_valid_ = false;  // the levelled frame is not propagated while the IMU filter runs
   ekf_.refresh_dcm();
   ErrVec sigma = ErrVec::Zero();
   const Real tilt = levelled_tilt_sigma();
