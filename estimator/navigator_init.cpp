@@ -264,8 +264,9 @@ bool Navigator::moved_since_rest(uint64_t t_us) const {
   // A cruise at constant velocity leaves the IMU window as quiet as rest, and
   // the ranges may not show the speed either: two anchors in view with the
   // vehicle crossing the line between them see range rates near zero (measured,
-  // held-out drive ground_blocked:77: rest confirmed 0.7 s into a 3.2 m/s
-  // cruise after a pull-away, the ranges-only filter stopped 1 m from that
+  // held-out drive ground_blocked:77: a rest held since the start resumed
+  // 0.5 s into a 3.2 m/s cruise after a pull-away, once the specific force was
+  // back at the rest's; the ranges-only filter stopped 1 m from that
   // line and then tracked the mirror image of the drive across it, 19 m off
   // for 10 s). The pull-away itself is in the IMU: a ground vehicle levelled
   // at rest integrates its horizontal specific force in the levelled frame

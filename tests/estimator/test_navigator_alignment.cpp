@@ -157,7 +157,7 @@ TEST(NavigatorAlignment, ACruiseAfterAPullAwayIsNotTakenForRestAgainWhileTheImuS
   // GIVEN a tuning drive of the ground_nlos cell (seed 58): the car stands
   // 13 s, then pulls away to 5.4 m/s under 26 % NLOS episodes. The IMU window
   // is as quiet in the steady part of the pull-away as at rest and the NLOS
-  // track shows no speed, so the rest check confirmed rest 1.8 s into it
+  // track shows no speed, so the rest check confirmed rest 1.5 s into it
   // (about 1.7 m/s) and levelled the attitude there; the IMU filter drifted up
   // to 3 m off later (RMSE 0.633 m, MAX 3.02 m). The same hole let a rest held
   // since the start resume once a cruise's specific force matched the rest's
