@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <new>
 
 #include "estimator/params.hpp"
 #include "firmware/app.hpp"
@@ -171,18 +172,21 @@ void Console::take_snapshot(Job job) {
   snap_.t_us = app_.last_tick_us();
   const Navigator& nav = app_.navigator();
   if (job == Job::kStats) {
-    snap_.app = app_.stats();
-    snap_.nav = app_.nav_counters();
-    snap_.can = app_.board().can.counters();
-    snap_.can_state = app_.board().can.state();
+    StatsPart& part = *::new (&snap_.part.stats) StatsPart();
+    part.app = app_.stats();
+    part.nav = app_.nav_counters();
+    part.can = app_.board().can.counters();
+    part.can_state = app_.board().can.state();
   } else if (job == Job::kAnchors) {
+    AnchorsPart& part = *::new (&snap_.part.anchors) AnchorsPart();
     const size_t n = nav.num_anchors();
-    snap_.num_anchors = n < kMaxAnchors ? n : kMaxAnchors;
-    for (size_t i = 0; i < snap_.num_anchors; ++i) snap_.anchors[i] = nav.anchor_status(i);
+    part.num_anchors = n < kMaxAnchors ? n : kMaxAnchors;
+    for (size_t i = 0; i < part.num_anchors; ++i) part.anchors[i] = nav.anchor_status(i);
   } else if (job == Job::kEkf) {
-    nav.state_vector(snap_.state);
+    EkfPart& part = *::new (&snap_.part.ekf) EkfPart();
+    nav.state_vector(part.state);
     for (size_t r = 0; r < Navigator::kErrorStateSize; ++r) {
-      for (size_t c = 0; c < Navigator::kErrorStateSize; ++c) snap_.cov[r][c] = nav.covariance(r, c);
+      for (size_t c = 0; c < Navigator::kErrorStateSize; ++c) part.cov[r][c] = nav.covariance(r, c);
     }
   }
 }

@@ -90,17 +90,33 @@ class Console final : public LogSink {
   enum class Job : uint8_t { kNone, kHelp, kParamList, kAnchors, kEkf, kStats, kHistory, kCal };
 
   // What a multi-line reply reports, copied when the command runs, so that all
-  // its lines describe the same cycle although they go out over several.
-  struct Snapshot {
+  // its lines describe the same cycle although they go out over several. One
+  // job runs at a time, so the parts share their storage (a union: RAM is the
+  // M4F image's tightest budget, docs/footprint.md): take_snapshot() begins the
+  // lifetime of the part its job reads, and the job's steps read only that part.
+  struct StatsPart {
     AppStats app;
     NavDiagnostics nav;
     hal::CanCounters can;
     hal::CanBusState can_state = hal::CanBusState::kDown;
-    uint64_t t_us = 0;
+  };
+  struct AnchorsPart {
     size_t num_anchors = 0;
     AnchorStatus anchors[kMaxAnchors];
+  };
+  struct EkfPart {
     float state[16] = {};
     float cov[Navigator::kErrorStateSize][Navigator::kErrorStateSize] = {};
+  };
+  union SnapshotPart {
+    SnapshotPart() : ekf() {}
+    StatsPart stats;      // Job::kStats
+    AnchorsPart anchors;  // Job::kAnchors
+    EkfPart ekf;          // Job::kEkf
+  };
+  struct Snapshot {
+    uint64_t t_us = 0;  // cycle the snapshot was taken in [us]
+    SnapshotPart part;
   };
 
   static const Command kCommands[];

@@ -203,7 +203,7 @@ void Console::cmd_stats(size_t argc, char**) {
 }
 
 bool Console::step_stats(size_t step) {
-  const AppStats& s = snap_.app;
+  const AppStats& s = snap_.part.stats.app;
   // Lines 7-8 (GNSS) and 9-10 (neighbours) exist only in builds with those features.
   if (!UWBNAV_GNSS && step >= 7) step += 2;
   if (!UWBNAV_COOP && step >= 9) step += 2;
@@ -241,15 +241,15 @@ bool Console::step_stats(size_t step) {
       break;
     }
     case 5: {
-      const hal::CanCounters& c = snap_.can;
+      const hal::CanCounters& c = snap_.part.stats.can;
       begin("stats can");
       add(" state=%s tx_ok=%lu tx_dropped=%lu bus_off=%lu rx_ok=%lu rx_overflow=%lu error_frames=%lu",
-          can_state_name(snap_.can_state), ul(c.tx_ok), ul(c.tx_dropped), ul(c.bus_off), ul(c.rx_ok),
+          can_state_name(snap_.part.stats.can_state), ul(c.tx_ok), ul(c.tx_dropped), ul(c.bus_off), ul(c.rx_ok),
           ul(c.rx_overflow), ul(c.error_frames));
       break;
     }
     case 6: {
-      const NavDiagnostics& dg = snap_.nav;
+      const NavDiagnostics& dg = snap_.part.stats.nav;
       begin("stats nav");
       add(" imu_samples=%lu ranges_received=%lu ranges_used=%lu ranges_rejected=%lu", ul(dg.imu_samples),
           ul(dg.ranges_received), ul(dg.ranges_used), ul(dg.ranges_rejected));
@@ -274,7 +274,7 @@ bool Console::step_stats(size_t step) {
     }
     case 8: {
       // What the estimator did with the accepted fixes, per GnssVerdict.
-      const NavDiagnostics& dg = snap_.nav;
+      const NavDiagnostics& dg = snap_.part.stats.nav;
       begin("stats gnss");
       add(" received=%lu fused=%lu", ul(dg.gnss_received), ul(dg.gnss_used));
       for (uint32_t v = 1; v < static_cast<uint32_t>(GnssVerdict::kCount); ++v) {
@@ -296,7 +296,7 @@ bool Console::step_stats(size_t step) {
     }
     case 10: {
       // What the estimator did with the ranges to neighbour vehicles, per NeighbourVerdict.
-      const NavDiagnostics& dg = snap_.nav;
+      const NavDiagnostics& dg = snap_.part.stats.nav;
       begin("stats coop");
       add(" states=%lu evictions=%lu ranges=%lu fused=%lu", ul(dg.neighbour_states), ul(dg.neighbour_evictions),
           ul(dg.neighbour_ranges), ul(dg.neighbour_used));
@@ -333,14 +333,14 @@ void Console::cmd_anchors(size_t argc, char**) {
 }
 
 bool Console::step_anchors(size_t step) {
-  const size_t n = snap_.num_anchors;
+  const size_t n = snap_.part.anchors.num_anchors;
   if (step == 0) {
     begin("anchors");
     add(" count=%lu", static_cast<unsigned long>(n));
     reply_end();
     return n > 0;
   }
-  const AnchorStatus& a = snap_.anchors[step - 1];
+  const AnchorStatus& a = snap_.part.anchors.anchors[step - 1];
   const uint64_t now = snap_.t_us;
   begin("anchors");
   add_anchor_fields(a);
@@ -385,7 +385,7 @@ void Console::cmd_ekf(size_t argc, char** argv) {
 bool Console::step_ekf(size_t step) {
   constexpr size_t kStates = Navigator::kErrorStateSize;
   if (step == 0) {
-    const float* x = snap_.state;
+    const float* x = snap_.part.ekf.state;
     begin("ekf state");
     add_fixed(" p_m=", x, 3, 3);
     add_fixed(" v_mps=", x + 3, 3, 3);
@@ -397,7 +397,7 @@ bool Console::step_ekf(size_t step) {
   }
   if (step == 1) {
     float p[kStates];
-    for (size_t i = 0; i < kStates; ++i) p[i] = snap_.cov[i][i];
+    for (size_t i = 0; i < kStates; ++i) p[i] = snap_.part.ekf.cov[i][i];
     begin("ekf pdiag");
     add_general(" p_m2=", p, 3, 3);
     add_general(" v_m2ps2=", p + 3, 3, 3);
@@ -410,7 +410,7 @@ bool Console::step_ekf(size_t step) {
   const size_t row = step - 2;
   begin("ekf cov");
   add(" row=%lu", static_cast<unsigned long>(row));
-  add_general(" v=", snap_.cov[row], kStates, 3);
+  add_general(" v=", snap_.part.ekf.cov[row], kStates, 3);
   reply_end();
   return row + 1 < kStates;
 }

@@ -214,6 +214,53 @@ TEST(ConsoleCommands, EkfPrintsStateAndDiagonalAndVerboseStreamsTheFullCovarianc
   EXPECT_EQ(rig.app.console().stats().dropped_bytes, 0U);
 }
 
+// The stats, anchors and ekf replies share one snapshot storage (a union, to
+// save RAM on the M4F): each reply must show what its own command copied, also
+// right after another kind of reply filled that storage.
+TEST(ConsoleCommands, MultiLineRepliesInTurnEachShowTheirOwnSnapshotThoughTheyShareItsStorage) {
+  const dataset::Recording rec = testing::truncated(sim_recording(), 10.0);
+  ConsoleRig rig(rec);
+  rig.run_s(11.0);
+  const Navigator& nav = rig.app.navigator();
+  const auto check_ekf = [&](const char* after) {
+    const auto full = reply_lines(rig.command("ekf -v"));
+    ASSERT_EQ(full.size(), 2U + Navigator::kErrorStateSize) << "after " << after;
+    for (size_t r = 0; r < Navigator::kErrorStateSize; ++r) {
+      const std::string v = kv(full[2 + r], "v");
+      size_t p = 0;
+      for (size_t c = 0; c < r && p != std::string::npos; ++c) {
+        p = v.find(',', p);
+        if (p != std::string::npos) ++p;
+      }
+      ASSERT_NE(p, std::string::npos) << full[2 + r];
+      const double want = static_cast<double>(nav.covariance(r, r));
+      EXPECT_NEAR(std::strtod(v.c_str() + p, nullptr), want, std::fabs(want) * 1e-2) << "after " << after << ": "
+                                                                                      << full[2 + r];
+    }
+  };
+  const auto check_anchors = [&](const char* after) {
+    const auto lines = reply_lines(rig.command("anchors"));
+    ASSERT_EQ(lines.size(), rec.site.num_anchors + 1) << "after " << after;
+    for (size_t i = 0; i < rec.site.num_anchors; ++i) {
+      EXPECT_EQ(kv(lines[i + 1], "id"), std::to_string(nav.anchor_status(i).anchor_id)) << "after " << after;
+      EXPECT_EQ(kv(lines[i + 1], "los"), std::to_string(nav.anchor_status(i).los_count)) << "after " << after;
+    }
+  };
+  const auto check_stats = [&](const char* after) {
+    const auto nav_lines = lines_with_prefix(reply_lines(rig.command("stats")), "stats nav ");
+    ASSERT_EQ(nav_lines.size(), 1U) << "after " << after;
+    EXPECT_EQ(kv(nav_lines[0], "ranges_received"), std::to_string(rig.app.nav_counters().ranges_received))
+        << "after " << after;
+  };
+  check_ekf("start");
+  check_anchors("ekf");
+  check_ekf("anchors");
+  check_stats("ekf");
+  check_anchors("stats");
+  check_stats("anchors");
+  check_ekf("stats");
+}
+
 TEST(ConsoleCommands, ParamListShowsEveryParameterWithBounds) {
   ConsoleRig rig(sim_recording());
   const auto lines = reply_lines(rig.command("param list"));
