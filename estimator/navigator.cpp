@@ -1203,6 +1203,7 @@ void Navigator::recover(uint64_t t_us, uint8_t min_level) {
     bg_ref_ = bg_init_;
     ba_init_ = ekf_.state().ba_body_mps2;
     levelled_ = true;
+    levelled_t_us_ = t_us;  // the gyro bias's drift of that attitude counts from now
     // That attitude comes from a filter that failed, not from a rest window:
     // it is handed over again with the moving-levelling uncertainty.
     levelled_at_rest_ = false;
