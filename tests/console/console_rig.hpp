@@ -96,6 +96,9 @@ class ConsoleRig {
         board_{sources_.imu, sources_.uwb, can, serial, clock_, store != nullptr ? *store : empty_, rec.site},
         app(board_),
         t_us(first_cycle_us(rec)) {
+    // The logger is process-wide (one per boot on a board); a rig is a fresh
+    // boot, so counters left by an earlier rig in the same process go.
+    logger().reset_counters();
     EXPECT_TRUE(ok(app.init()));
     tick();  // banner and first prompt
     serial.output.clear();
