@@ -51,6 +51,9 @@ DriveScore run_family_drive(const char* cell, uint32_t seed) {
   d.rmse_h_m = n > 0 ? std::sqrt(sum2 / static_cast<double>(n)) : 1e9;
   d.inertial_share = n > 0 ? static_cast<double>(inertial) / static_cast<double>(n) : 0.0;
   d.inside_2sigma = n > 0 ? static_cast<double>(inside) / static_cast<double>(2 * n) : 0.0;
+  std::printf("%s:%u: rmse_h %.3f m, max %.2f m, in 2-sigma %.1f %%, re-aligns %u, inflations %u, resets %u, IMU filter %.1f %%\n",
+              cell, static_cast<unsigned>(seed), d.rmse_h_m, d.max_h_m, 100.0 * d.inside_2sigma, d.run.diag.reinits,
+              d.run.diag.inflations, d.run.diag.resets, 100.0 * d.inertial_share);
   return d;
 }
 
@@ -63,8 +66,6 @@ TEST(NavigatorAlignment, AQuietCruiseAtConstantSpeedIsNotTakenForRest) {
   // (RMSE 2.18 m, IMU filter 0 % of the drive)
   // WHEN the navigator runs over it
   const DriveScore s = run_family_drive("outage", 81);
-  std::printf("outage:81: rmse_h %.3f m, max %.2f m, re-aligns %u, inflations %u, resets %u, IMU filter %.1f %%\n",
-              s.rmse_h_m, s.max_h_m, s.run.diag.reinits, s.run.diag.inflations, s.run.diag.resets, 100.0 * s.inertial_share);
   // THEN the cruise is seen as motion: the IMU filter takes over and stays
   EXPECT_TRUE(s.run.all_finite);
   EXPECT_EQ(s.run.diag.reinits, 0U);
@@ -82,8 +83,6 @@ TEST(NavigatorAlignment, ACruiseWithOnlyTwoAnchorsInViewIsNotTakenForRest) {
   // times in 11 min (RMSE 7.06 m, MAX 67 m)
   // WHEN the navigator runs over it
   const DriveScore s = run_family_drive("ground_blocked", 60);
-  std::printf("ground_blocked:60: rmse_h %.3f m, max %.2f m, re-aligns %u, resets %u, IMU filter %.1f %%\n", s.rmse_h_m,
-              s.max_h_m, s.run.diag.reinits, s.run.diag.resets, 100.0 * s.inertial_share);
   // THEN the cruise is seen as motion from the two anchors' range rates: no
   // re-alignment, the IMU filter takes over early and stays
   EXPECT_TRUE(s.run.all_finite);
@@ -102,8 +101,6 @@ TEST(NavigatorAlignment, APullAwayWithOneLineOfSightLeftKeepsItsNlosRangesByMome
   // sigma 10 m), RMSE 0.335 m
   // WHEN the navigator runs over it
   const DriveScore s = run_family_drive("ground_blocked", 6);
-  std::printf("ground_blocked:6: rmse_h %.3f m, max %.2f m, re-aligns %u, resets %u\n", s.rmse_h_m, s.max_h_m,
-              s.run.diag.reinits, s.run.diag.resets);
   // THEN the NLOS anchor's long ranges inside the gate are fused by moment
   // matching of the NLOS mixture (docs/nlos.md "Long NLOS ranges on a starved
   // geometry") and hold the position across the line of sight
@@ -164,8 +161,6 @@ TEST(NavigatorAlignment, ACruiseAfterAPullAwayIsNotTakenForRestAgainWhileTheImuS
   // again (held-out drive ground_blocked:77, 19 m off).
   // WHEN the navigator runs over it
   const DriveScore s = run_family_drive("ground_nlos", 58);
-  std::printf("ground_nlos:58: rmse_h %.3f m, max %.2f m, in 2-sigma %.1f %%, re-aligns %u, resets %u\n", s.rmse_h_m,
-              s.max_h_m, 100.0 * s.inside_2sigma, s.run.diag.reinits, s.run.diag.resets);
   // THEN the velocity the IMU integrated since the rest (1.6 m/s at that
   // moment, against a drift bound of about 0.1 m/s) says the car is still
   // moving: no rest is confirmed or resumed in the cruise
@@ -186,8 +181,6 @@ TEST(NavigatorAlignment, ARestAfterAReAlignmentAllowsTheGyroDriftSinceTheReAlign
   // (2 re-alignments, RMSE 0.840 m)
   // WHEN the navigator runs over it
   const DriveScore s = run_family_drive("ground_hard", 15);
-  std::printf("ground_hard:15: rmse_h %.3f m, max %.2f m, re-aligns %u, resets %u\n", s.rmse_h_m, s.max_h_m,
-              s.run.diag.reinits, s.run.diag.resets);
   // THEN the allowance grows from the re-alignment: no rest in the pull-away
   // and no second re-alignment
   EXPECT_TRUE(s.run.all_finite);
@@ -205,8 +198,6 @@ TEST(NavigatorAlignment, ARangesOnlyFilterStarvedByNlosEvidenceDuringAPullAwayRe
   // fused for up to 15 s, RMSE 10.4 m, MAX 43 m, 17 re-alignments)
   // WHEN the navigator runs over it
   const DriveScore s = run_family_drive("ground_hard", 12);
-  std::printf("ground_hard:12: rmse_h %.3f m, max %.2f m, re-aligns %u, resets %u\n", s.rmse_h_m, s.max_h_m,
-              s.run.diag.reinits, s.run.diag.resets);
   // THEN the starved filter enters the robust mode too and keeps its ranges
   EXPECT_TRUE(s.run.all_finite);
   EXPECT_EQ(s.run.diag.resets, 0U);
@@ -223,9 +214,6 @@ TEST(NavigatorAlignment, AMulticopterHandsOverTheLevellingsGyroBiasWithTheUncert
   // claimed 13 m (RMSE 6.52 m, MAX 56.9 m, 81 % inside the claimed 2 sigma)
   // WHEN the navigator runs over it
   const DriveScore s = run_family_drive("outage", 45);
-  std::printf("outage:45: rmse_h %.3f m, max %.2f m, in 2-sigma %.1f %%, re-aligns %u, resets %u, IMU filter %.1f %%\n",
-              s.rmse_h_m, s.max_h_m, 100.0 * s.inside_2sigma, s.run.diag.reinits, s.run.diag.resets,
-              100.0 * s.inertial_share);
   // THEN the bias's move is handed over as its uncertainty: the ranges correct
   // it before the outage, and what remains is in the claimed sigma (which
   // filter publishes when depends on the platform's rounding: measured on
@@ -248,9 +236,6 @@ TEST(NavigatorAlignment, AMulticopterTurningOnTheSpotIsNotLevelledAsRestNorHande
   // errors inside the claimed 2 sigma, 1 re-alignment)
   // WHEN the navigator runs over it
   const DriveScore s = run_family_drive("outage", 28);
-  std::printf("outage:28: rmse_h %.3f m, max %.2f m, in 2-sigma %.1f %%, re-aligns %u, resets %u, IMU filter %.1f %%\n",
-              s.rmse_h_m, s.max_h_m, 100.0 * s.inside_2sigma, s.run.diag.reinits, s.run.diag.resets,
-              100.0 * s.inertial_share);
   // THEN a held rest ends when the mean gyro moves, a later rest must find the
   // bias the first one measured, and a flying multicopter is handed over with
   // its complementary filter's tilt, not the rest window's: no filter is
@@ -271,8 +256,6 @@ TEST(NavigatorAlignment, AChordLongerThanTheVehicleCanDriveGivesNoStartHeading) 
   // claimed 1 m and re-aligned twice (RMSE 1.90 m, MAX 33 m)
   // WHEN the navigator runs over it
   const DriveScore s = run_family_drive("ground_blocked", 57);
-  std::printf("ground_blocked:57: rmse_h %.3f m, max %.2f m, re-aligns %u, resets %u, IMU filter %.1f %%\n", s.rmse_h_m,
-              s.max_h_m, s.run.diag.reinits, s.run.diag.resets, 100.0 * s.inertial_share);
   // THEN no heading is taken from a track with such a chord: the next chords
   // give it, and the IMU filter takes over and stays
   EXPECT_TRUE(s.run.all_finite);
@@ -292,8 +275,6 @@ TEST(NavigatorRobustMode, TwoNlosAnchorsLeftDoNotPullTheFilterInThroughTheirLine
   // jumped 3.5 m (RMSE 0.155 m)
   // WHEN the navigator runs over it
   const DriveScore s = run_family_drive("ground_blocked", 58);
-  std::printf("ground_blocked:58: rmse_h %.3f m, max %.2f m, inside 2 sigma %.1f %%, re-aligns %u, resets %u\n",
-              s.rmse_h_m, s.max_h_m, 100.0 * s.inside_2sigma, s.run.diag.reinits, s.run.diag.resets);
   // THEN robust mode weighs such a range by its pair's channel-only NLOS
   // episode, R / (1 - p) (docs/nlos.md item 6), and the IMU filter holds
   EXPECT_TRUE(s.run.all_finite);
