@@ -57,6 +57,13 @@ DriveScore run_family_drive(const char* cell, uint32_t seed) {
   return d;
 }
 
+// Every output finite and no hard reset: what each drive below must keep,
+// whatever else it checks.
+void expect_finite_without_hard_reset(const DriveScore& s) {
+  EXPECT_TRUE(s.run.all_finite);
+  EXPECT_EQ(s.run.diag.resets, 0U);
+}
+
 TEST(NavigatorAlignment, AQuietCruiseAtConstantSpeedIsNotTakenForRest) {
   // GIVEN a tuning drive of the outage cell (seed 81): a car in a parking lot
   // drives straight legs at a constant 1.26 m/s with a quiet IMU, which alone
@@ -104,8 +111,7 @@ TEST(NavigatorAlignment, APullAwayWithOneLineOfSightLeftKeepsItsNlosRangesByMome
   // THEN the NLOS anchor's long ranges inside the gate are fused by moment
   // matching of the NLOS mixture (docs/nlos.md "Long NLOS ranges on a starved
   // geometry") and hold the position across the line of sight
-  EXPECT_TRUE(s.run.all_finite);
-  EXPECT_EQ(s.run.diag.resets, 0U);
+  expect_finite_without_hard_reset(s);
   EXPECT_LT(s.max_h_m, 4.0);
   EXPECT_LT(s.rmse_h_m, 0.25);
   EXPECT_GT(s.inside_2sigma, 0.95);
@@ -164,8 +170,7 @@ TEST(NavigatorAlignment, ACruiseAfterAPullAwayIsNotTakenForRestAgainWhileTheImuS
   // THEN the velocity the IMU integrated since the rest (1.6 m/s at that
   // moment, against a drift bound of about 0.1 m/s) says the car is still
   // moving: no rest is confirmed or resumed in the cruise
-  EXPECT_TRUE(s.run.all_finite);
-  EXPECT_EQ(s.run.diag.resets, 0U);
+  expect_finite_without_hard_reset(s);
   EXPECT_LT(s.max_h_m, 2.0);
   EXPECT_LT(s.rmse_h_m, 0.4);
   EXPECT_GT(s.inside_2sigma, 0.9);
@@ -183,8 +188,7 @@ TEST(NavigatorAlignment, ARestAfterAReAlignmentAllowsTheGyroDriftSinceTheReAlign
   const DriveScore s = run_family_drive("ground_hard", 15);
   // THEN the allowance grows from the re-alignment: no rest in the pull-away
   // and no second re-alignment
-  EXPECT_TRUE(s.run.all_finite);
-  EXPECT_EQ(s.run.diag.resets, 0U);
+  expect_finite_without_hard_reset(s);
   EXPECT_LE(s.run.diag.reinits, 1U);
   EXPECT_LT(s.max_h_m, 4.0);
 }
@@ -199,8 +203,7 @@ TEST(NavigatorAlignment, ARangesOnlyFilterStarvedByNlosEvidenceDuringAPullAwayRe
   // WHEN the navigator runs over it
   const DriveScore s = run_family_drive("ground_hard", 12);
   // THEN the starved filter enters the robust mode too and keeps its ranges
-  EXPECT_TRUE(s.run.all_finite);
-  EXPECT_EQ(s.run.diag.resets, 0U);
+  expect_finite_without_hard_reset(s);
   EXPECT_LT(s.rmse_h_m, 2.0);
   EXPECT_LT(s.max_h_m, 20.0);
 }
@@ -219,8 +222,7 @@ TEST(NavigatorAlignment, AMulticopterHandsOverTheLevellingsGyroBiasWithTheUncert
   // filter publishes when depends on the platform's rounding: measured on
   // x86-64 the IMU filter takes over, under qemu-aarch64 it does not; both
   // must stay honest)
-  EXPECT_TRUE(s.run.all_finite);
-  EXPECT_EQ(s.run.diag.resets, 0U);
+  expect_finite_without_hard_reset(s);
   EXPECT_GT(s.inside_2sigma, 0.9);
   EXPECT_LT(s.rmse_h_m, 4.0);
   EXPECT_LT(s.max_h_m, 40.0);
@@ -240,8 +242,7 @@ TEST(NavigatorAlignment, AMulticopterTurningOnTheSpotIsNotLevelledAsRestNorHande
   // bias the first one measured, and a flying multicopter is handed over with
   // its complementary filter's tilt, not the rest window's: no filter is
   // started on a turn rate, and what is published stays inside its claim
-  EXPECT_TRUE(s.run.all_finite);
-  EXPECT_EQ(s.run.diag.resets, 0U);
+  expect_finite_without_hard_reset(s);
   EXPECT_EQ(s.run.diag.reinits, 0U);
   EXPECT_GT(s.inside_2sigma, 0.99);
   EXPECT_LT(s.rmse_h_m, 4.0);
@@ -277,8 +278,7 @@ TEST(NavigatorRobustMode, TwoNlosAnchorsLeftDoNotPullTheFilterInThroughTheirLine
   const DriveScore s = run_family_drive("ground_blocked", 58);
   // THEN robust mode weighs such a range by its pair's channel-only NLOS
   // episode, R / (1 - p) (docs/nlos.md item 6), and the IMU filter holds
-  EXPECT_TRUE(s.run.all_finite);
-  EXPECT_EQ(s.run.diag.resets, 0U);
+  expect_finite_without_hard_reset(s);
   EXPECT_LT(s.max_h_m, 1.5);
   EXPECT_LT(s.rmse_h_m, 0.12);
   EXPECT_GT(s.inside_2sigma, 0.95);
