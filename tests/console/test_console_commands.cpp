@@ -28,6 +28,17 @@ using testing::lines_with_prefix;
 using testing::reply_lines;
 using testing::sim_recording;
 
+// The numbers of a comma-separated value ("1.5,2,-3e-4").
+std::vector<double> csv_numbers(const std::string& v) {
+  std::vector<double> out;
+  for (size_t p = 0; p != std::string::npos && p <= v.size();) {
+    out.push_back(std::strtod(v.c_str() + p, nullptr));
+    const size_t c = v.find(',', p);
+    p = c == std::string::npos ? c : c + 1;
+  }
+  return out;
+}
+
 bool params_equal(const Params& a, const Params& b) {
   for (size_t i = 0; i < kNumParams; ++i) {
     const auto id = static_cast<ParamId>(i);
@@ -197,13 +208,7 @@ TEST(ConsoleCommands, EkfPrintsStateAndDiagonalAndVerboseStreamsTheFullCovarianc
   for (size_t r = 0; r < Navigator::kErrorStateSize; ++r) {
     const std::string& l = full[2 + r];
     EXPECT_EQ(kv(l, "row"), std::to_string(r));
-    const std::string v = kv(l, "v");
-    std::vector<double> row;
-    for (size_t p = 0; p != std::string::npos && p <= v.size();) {
-      row.push_back(std::strtod(v.c_str() + p, nullptr));
-      const size_t c = v.find(',', p);
-      p = c == std::string::npos ? c : c + 1;
-    }
+    const std::vector<double> row = csv_numbers(kv(l, "v"));
     ASSERT_EQ(row.size(), Navigator::kErrorStateSize) << l;
     // The diagonal printed here is the navigator's (3 significant digits).
     const double want = static_cast<double>(rig.app.navigator().covariance(r, r));
@@ -226,16 +231,10 @@ TEST(ConsoleCommands, MultiLineRepliesInTurnEachShowTheirOwnSnapshotThoughTheySh
     const auto full = reply_lines(rig.command("ekf -v"));
     ASSERT_EQ(full.size(), 2U + Navigator::kErrorStateSize) << "after " << after;
     for (size_t r = 0; r < Navigator::kErrorStateSize; ++r) {
-      const std::string v = kv(full[2 + r], "v");
-      size_t p = 0;
-      for (size_t c = 0; c < r && p != std::string::npos; ++c) {
-        p = v.find(',', p);
-        if (p != std::string::npos) ++p;
-      }
-      ASSERT_NE(p, std::string::npos) << full[2 + r];
+      const std::vector<double> row = csv_numbers(kv(full[2 + r], "v"));
+      ASSERT_EQ(row.size(), Navigator::kErrorStateSize) << full[2 + r];
       const double want = static_cast<double>(nav.covariance(r, r));
-      EXPECT_NEAR(std::strtod(v.c_str() + p, nullptr), want, std::fabs(want) * 1e-2) << "after " << after << ": "
-                                                                                      << full[2 + r];
+      EXPECT_NEAR(row[r], want, std::fabs(want) * 1e-2) << "after " << after << ": " << full[2 + r];
     }
   };
   const auto check_anchors = [&](const char* after) {
