@@ -38,6 +38,9 @@ struct RangeContext {
                                      // anchor/tag pair's previous range, from the
                                      // inertial/filter solution (Δd_k of eq. 3) [m]
   bool filter_ready = false;         // filter initialised and converged enough to trust predictions
+  bool innovation_is_evidence = true;  // false: the filter learns no range error, so each of a pair's
+                                       // innovations carries the same unlearned offset: a long one is
+                                       // no NLOS evidence (default policy)
 };
 
 // The gating layer's verdict on one range.

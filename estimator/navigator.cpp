@@ -344,11 +344,13 @@ Navigator::CvModel Navigator::cv_model(uint64_t t_us) const {
   m.accel_psd = std::fmax(m.accel_psd, cfg_.cv_speed_sigma * std::sqrt(Real(2) / m.vel_tau_s));
   // With a heading, the turn rate is a state too (no gyro measures it).
   if (cv_yaw_known_) m.turn_psd = cfg_.cv_turn_psd;
-  // Nothing measures gravity: once the lever arms are modelled (heading
-  // known), a ground vehicle's tilt is a prior about level. In the centroid
-  // form (heading unknown) the lever arms' whole uncertainty is in the
-  // published sigma instead.
-  if (site_.platform == Platform::kGround && cv_yaw_known_) m.level_sigma_rad = cfg_.level_sigma;
+  // Nothing measures gravity: a ground vehicle's tilt is a prior about level,
+  // in the centroid form (heading unknown) too. There the tags' vertical lever
+  // still carries the attitude into the ranges, and without the prior the
+  // tilt drifted (trolley3:6: 0.2 deg at 20 s, 150 deg from 60 s on), which put the
+  // tags below the floor and grew the published sigma through the lever
+  // circle: an honest-looking sigma for a wrong reason.
+  if (site_.platform == Platform::kGround) m.level_sigma_rad = cfg_.level_sigma;
   return m;
 }
 
@@ -780,13 +782,23 @@ RangeReport Navigator::on_range(const UwbRange& range) {
   ctx.range = range;
   ctx.anchor_index = ai;
   ctx.anchor_pos_nav_m = site_.anchors[ai].pos_nav_m;
-  const Real r_nom = r_los_m2_;
-  ctx.meas_var_m2 = static_cast<float>(r_nom);
-
   const Real dt_r = seconds(diff_us(range.t_us, t_state_us_));
   const RangePrediction pred =
       mm_range_predict(ekf_.state(), ekf_.dcm(), cv_mode_ ? Vec3::Zero() : last_gyro_body_radps_, model_lever(ti),
                        to_vec3(ctx.anchor_pos_nav_m), dt_r, es);
+  // Heading unknown (centroid form) without an IMU: the tag lies on its
+  // lever's circle about the tags' centroid, uniform in azimuth, so its
+  // horizontal offset rho adds rho^2 / 2 along the horizontal line of sight to
+  // the range's variance (as in the published sigma and the integrity check).
+  // Not while an IMU aligns: measured on the real multicopter (miluv, 1 range
+  // per second) it weakens the sparse ranges the in-flight alignment needs
+  // (RMSE 1.33 -> 2.22 m), and that filter hands over to the IMU filter anyway.
+  Real r_nom = r_los_m2_;
+  if (cv_mode_ && !cv_yaw_known_ && pred.valid && !imu_alive(range.t_us)) {
+    const Real rho2 = (lever(ti) - mean_lever()).head<2>().squaredNorm();
+    r_nom += Real(0.5) * rho2 * pred.los_nav.head<2>().squaredNorm();
+  }
+  ctx.meas_var_m2 = static_cast<float>(r_nom);
   Real s_nom = Real(0);
   Real hph = Real(0);
   if (pred.valid) {
@@ -806,6 +818,8 @@ RangeReport Navigator::on_range(const UwbRange& range) {
     // Without IMU the prediction carries no independent motion information
     // (the consistency evidence of seed 000 eq. 3 needs an inertial distance).
     ctx.filter_ready = sig_h < cfg_.degraded_sigma;
+    // The ranges-only filter without an IMU learns no range error (see fuse()).
+    ctx.innovation_is_evidence = !(cv_mode_ && !imu_alive(range.t_us));
   }
 
   const GatingDecision d = gating_.assess(ctx);

@@ -325,6 +325,50 @@ TEST(GatingLayer, RobustModeWeighsARangeByItsPairsChannelEpisodeNotByItsOwnGapAl
   EXPECT_GE(d_episode.r_scale, 20.0F);  // p >= 0.95 after 0.5 s of 15 dB gaps and 20 ms
 }
 
+TEST(GatingLayer, DefaultLongInnovationOfAFilterThatLearnsNoOffsetIsNoNlosEvidence) {
+  // A pair read 0.4 m long range after range (2.8 sigma of S): to a filter
+  // that learns its offsets that is an NLOS episode; to one whose offsets are
+  // consider states it may be the pair's unlearned offset, and the chain must
+  // not hold it out. A gross error is still rejected at the gate.
+  for (const bool learns : {true, false}) {
+    GatingLayer g;
+    Params p = params_with(GatingPolicy::kDefault);
+    ASSERT_TRUE(ok(p.set(ParamId::kGateEscapeS, 0.0F)));  // robust mode off: gating only
+    ASSERT_TRUE(ok(g.configure(make_site(), p)));
+    size_t used = 0;
+    for (uint64_t k = 0; k < 200; ++k) {
+      RangeContext c = ctx_at(0, k * 10000, 20.4F, 0.4F);
+      c.innovation_is_evidence = learns;
+      if (g.assess(c).use) ++used;
+    }
+    if (learns) {
+      EXPECT_EQ(used, 0U);
+    } else {
+      EXPECT_EQ(used, 200U);
+    }
+    RangeContext gross = ctx_at(1, 2000000, 21.5F, 1.5F);  // 10.6 sigma
+    gross.innovation_is_evidence = learns;
+    EXPECT_FALSE(g.assess(gross).use) << "learns offsets: " << learns;
+  }
+}
+
+TEST(GatingLayer, DefaultShortInnovationOfAFilterThatLearnsNoOffsetStillTestifiesLineOfSight) {
+  // A small innovation outweighs a channel reading that alone would make the
+  // range NLOS (9.6 dB gap: p 0.94 against the chain's prior 0.09 gives 0.62),
+  // as it does in the IMU filter: the one-sided clamp only removes NLOS testimony.
+  GatingLayer g;
+  Params p = params_with(GatingPolicy::kDefault);
+  ASSERT_TRUE(ok(p.set(ParamId::kGateEscapeS, 0.0F)));
+  ASSERT_TRUE(ok(g.configure(make_site(), p)));
+  RangeContext c = ctx_at(0, 0, 20.0F, 0.0F);
+  c.innovation_is_evidence = false;
+  c.range.fp_power_dbm = -89.6F;
+  c.range.rx_power_dbm = -80.0F;
+  const GatingDecision d = g.assess(c);
+  EXPECT_LT(d.p_fused, 0.5F);
+  EXPECT_TRUE(d.use);
+}
+
 TEST(GatingLayer, DefaultRejectsGrossOutlierDespiteLosEvidence) {
   GatingLayer g;
   Params p = params_with(GatingPolicy::kDefault);
