@@ -542,7 +542,7 @@ bool Navigator::fuse(const ScalarObs& obs) {
   // consider updates build, a full update would move every offset with each
   // height innovation (measured on a self-calibrated trolley at rest: anchor
   // offsets 0.23 m off within 1 s, two anchors then gated out for good).
-  return ekf_.update(obs, cv_mode_ && !imu_alive(t_state_us_)).applied;
+  return ekf_.update(obs, ranges_only_without_imu(t_state_us_)).applied;
 }
 
 void Navigator::bridge_outage(uint64_t t_us, const Vec3& accel_mean_body_mps2, const Vec3& gyro_mean_body_radps,
@@ -793,8 +793,9 @@ RangeReport Navigator::on_range(const UwbRange& range) {
   // Not while an IMU aligns: measured on the real multicopter (miluv, 1 range
   // per second) it weakens the sparse ranges the in-flight alignment needs
   // (RMSE 1.33 -> 2.22 m), and that filter hands over to the IMU filter anyway.
+  const bool without_imu = ranges_only_without_imu(range.t_us);
   Real r_nom = r_los_m2_;
-  if (cv_mode_ && !cv_yaw_known_ && pred.valid && !imu_alive(range.t_us)) {
+  if (without_imu && !cv_yaw_known_ && pred.valid) {
     const Real rho2 = (lever(ti) - mean_lever()).head<2>().squaredNorm();
     r_nom += Real(0.5) * rho2 * pred.los_nav.head<2>().squaredNorm();
   }
@@ -818,8 +819,11 @@ RangeReport Navigator::on_range(const UwbRange& range) {
     // Without IMU the prediction carries no independent motion information
     // (the consistency evidence of seed 000 eq. 3 needs an inertial distance).
     ctx.filter_ready = sig_h < cfg_.degraded_sigma;
-    // The ranges-only filter without an IMU learns no range error (see fuse()).
-    ctx.innovation_is_evidence = !(cv_mode_ && !imu_alive(range.t_us));
+    // Its range errors are consider states for the whole drive: a long
+    // innovation may be a pair's unlearned offset (docs/nlos.md). The aligning
+    // filter (IMU present) fuses ranges as consider too, but for seconds only;
+    // not measured there, so it keeps the full evidence.
+    ctx.innovation_is_evidence = !without_imu;
   }
 
   const GatingDecision d = gating_.assess(ctx);

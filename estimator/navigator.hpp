@@ -281,6 +281,9 @@ class Navigator {
 
   // navigator.cpp
   bool imu_alive(uint64_t t_us) const;
+  // The ranges-only filter without an IMU: its range errors are consider
+  // states (learnt by no update), and it runs so for the whole drive.
+  bool ranges_only_without_imu(uint64_t t_us) const { return cv_mode_ && !imu_alive(t_us); }
   Real cv_accel_psd(uint64_t t_us) const;
   // The ranges-only model's process at t_us: white acceleration density
   // [m/s^2/sqrt(Hz)] and velocity time constant [s] (0: constant velocity).

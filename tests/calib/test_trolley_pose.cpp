@@ -165,7 +165,7 @@ TEST(TrolleyPose, UncalibratedTrolleyStaysLevelWhileItsHeadingIsUnknownAndNeedsN
   // GIVEN tuning drive trolley3:6 (no IMU, uncalibrated offsets): the
   // ranges-only filter publishes the tags' centroid all drive long. Its tags'
   // vertical lever carries the attitude into the ranges, and without a level
-  // prior in that form the tilt drifted to 150 deg by 40 s (tags below the
+  // prior in that form the tilt drifted to 150 deg from 60 s on (tags below the
   // floor, the published sigma grown through the lever circle, re-anchors and
   // re-alignments near anchors when the short-range test fired)
   sim::SimOutput so;
@@ -189,7 +189,7 @@ TEST(TrolleyPose, UncalibratedTrolleyStaysLevelWhileItsHeadingIsUnknownAndNeedsN
               static_cast<unsigned>(s.diag.reinits));
   // THEN the trolley stays level (level prior: 1.7 deg 1-sigma) and needs no
   // recovery (it had 1 re-anchor and 1 re-alignment), at the accuracy the
-  // uncalibrated offsets allow (0.19 m; 0.17 m with the drifting tilt). Its
+  // uncalibrated offsets allow (0.14 m; 0.17 m with the drifting tilt). Its
   // sigma no longer grows with a tilt; whether it holds is a cell figure
   // (uwbnav eval family --cells trolley3), not one drive's: a drive's offsets
   // bias it by one constant for the whole drive.
