@@ -126,6 +126,45 @@ TEST(EvalFamily, HonestyFiguresFollowTheirDefinitions) {
   EXPECT_NEAR(c.rmse_med, m.rmse_h_m, 1e-12);
 }
 
+// Issue 19's "ranges fused on line-of-sight data": the denominator is every
+// range the recording labels LOS, including one input validation dropped (it
+// never reaches the gating), so dropping good data cannot raise the share.
+TEST(EvalFamily, LosFusedShareCountsEveryLabelledLosRangeAndFalseAlarmsOnlyLosCalledNlos) {
+  dataset::Recording rec = still_truth();  // one NLOS-labelled range at 0.5 s
+  rec.uwb.clear();
+  const int8_t labels[] = {0, 0, 0, 0, 1, -1};
+  for (int i = 0; i < 6; ++i) {
+    dataset::UwbRow u;
+    u.range.t_us = 1000000 + static_cast<uint64_t>(i) * 10000;
+    u.range.anchor_id = 1;
+    u.nlos_label = labels[i];
+    rec.uwb.push_back(u);
+  }
+  ReplayResult res;
+  res.estimates.push_back(est(2000000, 0, 0, 1, 1, 0));
+  const auto report = [&](int i, bool used, bool nlos) {
+    RangeReport r;
+    r.t_us = rec.uwb[static_cast<size_t>(i)].range.t_us;
+    r.anchor_id = 1;
+    r.used = used;
+    r.nlos = nlos;
+    res.ranges.push_back(r);
+  };
+  report(0, true, false);
+  report(1, false, true);   // LOS called NLOS: a false alarm, not fused
+  report(2, true, false);
+  // range 3 (LOS) was dropped by input validation: no report
+  report(4, false, true);   // NLOS called NLOS
+  report(5, true, false);   // unlabelled: in neither figure
+  const DriveMetrics m = drive_metrics(rec, res);
+  EXPECT_EQ(m.los_ranges, 4U);
+  EXPECT_EQ(m.los_fused, 2U);
+  const CellSummary c = summarise_cell("los", {m});
+  EXPECT_NEAR(c.los_fused_share, 0.5, 1e-12);
+  EXPECT_NEAR(c.nlos_false_alarm, 1.0 / 3.0, 1e-12);  // FP 1 of the 3 LOS ranges the gating judged
+  EXPECT_NEAR(c.nlos_precision, 0.5, 1e-12);
+}
+
 TEST(EvalFamily, DriveWithoutAFixHasNoAccuracyAndZeroAvailability) {
   const dataset::Recording rec = still_truth();
   ReplayResult res;
@@ -187,7 +226,8 @@ TEST(EvalFamily, FastSubsetProducesSaneFiguresForEveryCell) {
       EXPECT_GE(c.max_med, c.rmse_med) << cell.name;
       EXPECT_GE(c.ttfe_med_s, 0.0) << cell.name;
     }
-    for (double share : {c.in2s_h, c.in2s_x, c.in2s_y, c.nees_in, c.nis_in, c.fused_share}) {
+    for (double share : {c.in2s_h, c.in2s_x, c.in2s_y, c.nees_in, c.nis_in, c.fused_share, c.los_fused_share,
+                          c.nlos_false_alarm}) {
       if (std::isfinite(share)) {
         EXPECT_GE(share, 0.0) << cell.name;
         EXPECT_LE(share, 1.0) << cell.name;

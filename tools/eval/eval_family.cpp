@@ -229,10 +229,19 @@ DriveMetrics drive_metrics(const dataset::Recording& rec, const ReplayResult& re
   // NLOS decisions against the labels.
   std::map<std::tuple<uint64_t, uint16_t, uint8_t>, int8_t> labels;
   for (const auto& u : rec.uwb) labels[{u.range.t_us, u.range.anchor_id, u.range.tag_id}] = u.nlos_label;
+  std::map<std::tuple<uint64_t, uint16_t, uint8_t>, bool> fused;
   for (const RangeReport& r : res.ranges) {
+    if (r.used) fused[{r.t_us, r.anchor_id, r.tag_id}] = true;
     const auto it = labels.find({r.t_us, r.anchor_id, r.tag_id});
     if (it == labels.end() || it->second < 0) continue;
     m.nlos.add(it->second == 1, r.nlos);
+  }
+  // Line-of-sight ranges of the recording (issue 19's "fused on line-of-sight
+  // data"): every labelled-LOS range counts, also one input validation dropped.
+  for (const auto& [key, label] : labels) {
+    if (label != 0) continue;
+    ++m.los_ranges;
+    m.los_fused += fused.count(key) != 0 ? 1 : 0;
   }
   return m;
 }
@@ -245,7 +254,7 @@ CellSummary summarise_cell(const std::string& name, const std::vector<DriveMetri
   size_t err_n = 0, fb_n = 0, fb_hon = 0, fb_in = 0, sp_n = 0, sp_in = 0;
   double err_sq = 0.0, sp_sq = 0.0;
   double nees_sum = 0, nis_sum = 0, fb_sq = 0;
-  uint64_t resets = 0, reinits = 0, inflations = 0, reanchors = 0, used = 0, rejected = 0;
+  uint64_t resets = 0, reinits = 0, inflations = 0, reanchors = 0, used = 0, rejected = 0, los = 0, los_used = 0;
   Confusion conf;
   for (const DriveMetrics& d : drives) {
     ++c.drives;
@@ -287,6 +296,8 @@ CellSummary summarise_cell(const std::string& name, const std::vector<DriveMetri
     c.sparse_max = std::max(c.sparse_max, d.sparse_max_m);
     used += d.ranges_used;
     rejected += d.ranges_rejected;
+    los += d.los_ranges;
+    los_used += d.los_fused;
     conf.add(d.nlos);
   }
   c.rmse_med = median(rmse);
@@ -321,6 +332,8 @@ CellSummary summarise_cell(const std::string& name, const std::vector<DriveMetri
   if (sp_n == 0) c.sparse_max = std::nan("");
   c.nlos_precision = conf.precision();
   c.nlos_recall = conf.recall();
+  c.los_fused_share = ratio(static_cast<double>(los_used), static_cast<double>(los));
+  c.nlos_false_alarm = conf.false_alarm_rate();
   return c;
 }
 
@@ -386,7 +399,8 @@ void print_family_tables(std::FILE* f, const std::vector<CellSummary>& rows, boo
                   num(c.nis_mean, 2), pct(c.nis_in), num(c.resets_per_h, 1), num(c.inflations_per_h, 1),
                   num(c.reanchors_per_h, 1), num(c.reinits_per_h, 1),
                   pct(c.fallback_share), num(c.fallback_rmse, 3), pct(c.fallback_in2s_h), num(c.inertial_rmse, 3),
-                  pct(c.inertial_in2s_h), pct(c.fused_share), pct(c.nlos_precision), pct(c.nlos_recall)});
+                  pct(c.inertial_in2s_h), pct(c.fused_share), pct(c.los_fused_share), pct(c.nlos_false_alarm),
+                  pct(c.nlos_precision), pct(c.nlos_recall)});
   }
   std::fprintf(f, "%sAccuracy and availability (horizontal error of the body origin; medians and worst over drives)%s\n\n",
                markdown ? "**" : "", markdown ? "**" : "");
@@ -399,7 +413,8 @@ void print_family_tables(std::FILE* f, const std::vector<CellSummary>& rows, boo
   print_table(f,
               {"cell", "in 2sig h", "in 2sig x", "in 2sig y", "NEES mean", "NEES<=5.99", "NIS mean", "NIS<=3.84",
                "resets/h", "inflate/h", "re-anchor/h", "re-align/h", "fallback", "fallback RMSE [m]",
-               "fallback in 2sig h", "IMU filter RMSE [m]", "IMU filter in 2sig h", "fused", "NLOS P", "NLOS R"},
+               "fallback in 2sig h", "IMU filter RMSE [m]", "IMU filter in 2sig h", "fused", "LOS fused", "NLOS FA", "NLOS P",
+               "NLOS R"},
               t2, markdown);
   // Sparse anchors (cells where the vehicle sometimes hears fewer than 3 anchors).
   std::vector<std::vector<std::string>> t3;

@@ -61,6 +61,7 @@ struct DriveMetrics {
   size_t sparse_n = 0, sparse_in2s_xy = 0;  // in2s: x and y axes counted separately
   double sparse_sq_sum = 0.0, sparse_max_m = 0.0;
   uint64_t ranges_used = 0, ranges_rejected = 0;
+  uint64_t los_ranges = 0, los_fused = 0;  // ranges the recording labels LOS, and those of them fused
   Confusion nlos;               // decisions vs labels (labels never reach the firmware)
   double wall_s = 0.0;          // simulation + replay wall time [s]
 };
@@ -87,7 +88,9 @@ struct CellSummary {
   double fallback_share = 0.0, fallback_rmse = 0.0;
   double inertial_rmse = 0.0;  // pooled horizontal RMSE of the epochs published by the IMU filter [m]
   double fallback_in2s_h = 0.0, inertial_in2s_h = 0.0;  // "in 2sig h" of each mode's epochs
-  double fused_share = 0.0;
+  double fused_share = 0.0;      // fused / (fused + rejected by gating), all ranges
+  double los_fused_share = 0.0;  // fused share of the LOS-labelled ranges (validation drops count as not fused)
+  double nlos_false_alarm = 0.0; // LOS-labelled ranges the gating called NLOS: FP / (FP + TN)
   double sparse_share = 0.0, sparse_rmse = 0.0, sparse_max = 0.0, sparse_in2s = 0.0;  // epochs with < 3 anchors heard
   double nlos_precision = 0.0, nlos_recall = 0.0;
 };

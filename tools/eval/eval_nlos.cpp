@@ -41,6 +41,9 @@ double Confusion::precision() const {
 double Confusion::recall() const {
   return tp + fn == 0 ? std::nan("") : static_cast<double>(tp) / static_cast<double>(tp + fn);
 }
+double Confusion::false_alarm_rate() const {
+  return fp + tn == 0 ? std::nan("") : static_cast<double>(fp) / static_cast<double>(fp + tn);
+}
 double Confusion::accuracy() const {
   return n() == 0 ? std::nan("") : static_cast<double>(tp + tn) / static_cast<double>(n());
 }

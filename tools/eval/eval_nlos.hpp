@@ -25,6 +25,7 @@ struct Confusion {
   double precision() const;  // TP / (TP + FP), NaN when undefined
   double recall() const;     // TP / (TP + FN)
   double accuracy() const;   // (TP + TN) / n
+  double false_alarm_rate() const;  // FP / (FP + TN): LOS ranges called NLOS
 };
 
 // One row of the identification table: a gating configuration run through the Navigator.
