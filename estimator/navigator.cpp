@@ -821,8 +821,9 @@ RangeReport Navigator::on_range(const UwbRange& range) {
     ctx.filter_ready = sig_h < cfg_.degraded_sigma;
     // Its range errors are consider states for the whole drive: a long
     // innovation may be a pair's unlearned offset (docs/nlos.md). The aligning
-    // filter (IMU present) fuses ranges as consider too, but for seconds only;
-    // not measured there, so it keeps the full evidence.
+    // filter (IMU present) fuses ranges as consider too, but for seconds only,
+    // and keeps the full evidence: clipped there as well, tuning seeds 1-60
+    // gave 44 drives better and 39 worse (air_indoor worst 0.271 -> 0.343 m).
     ctx.innovation_is_evidence = !without_imu;
   }
 
