@@ -130,8 +130,8 @@ TEST(EvalFamily, HonestyFiguresFollowTheirDefinitions) {
 // range the recording labels LOS, including one input validation dropped (it
 // never reaches the gating), so dropping good data cannot raise the share.
 TEST(EvalFamily, LosFusedShareCountsEveryLabelledLosRangeAndFalseAlarmsOnlyLosCalledNlos) {
-  dataset::Recording rec = still_truth();  // one NLOS-labelled range at 0.5 s
-  rec.uwb.clear();
+  dataset::Recording rec = still_truth();
+  rec.uwb.clear();  // six ranges instead: four LOS, one NLOS, one unlabelled
   const int8_t labels[] = {0, 0, 0, 0, 1, -1};
   for (int i = 0; i < 6; ++i) {
     dataset::UwbRow u;

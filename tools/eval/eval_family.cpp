@@ -16,6 +16,7 @@
 #include <cstdlib>
 #include <map>
 #include <mutex>
+#include <set>
 #include <sstream>
 #include <thread>
 #include <tuple>
@@ -229,9 +230,9 @@ DriveMetrics drive_metrics(const dataset::Recording& rec, const ReplayResult& re
   // NLOS decisions against the labels.
   std::map<std::tuple<uint64_t, uint16_t, uint8_t>, int8_t> labels;
   for (const auto& u : rec.uwb) labels[{u.range.t_us, u.range.anchor_id, u.range.tag_id}] = u.nlos_label;
-  std::map<std::tuple<uint64_t, uint16_t, uint8_t>, bool> fused;
+  std::set<std::tuple<uint64_t, uint16_t, uint8_t>> fused;
   for (const RangeReport& r : res.ranges) {
-    if (r.used) fused[{r.t_us, r.anchor_id, r.tag_id}] = true;
+    if (r.used) fused.insert({r.t_us, r.anchor_id, r.tag_id});
     const auto it = labels.find({r.t_us, r.anchor_id, r.tag_id});
     if (it == labels.end() || it->second < 0) continue;
     m.nlos.add(it->second == 1, r.nlos);
@@ -413,8 +414,8 @@ void print_family_tables(std::FILE* f, const std::vector<CellSummary>& rows, boo
   print_table(f,
               {"cell", "in 2sig h", "in 2sig x", "in 2sig y", "NEES mean", "NEES<=5.99", "NIS mean", "NIS<=3.84",
                "resets/h", "inflate/h", "re-anchor/h", "re-align/h", "fallback", "fallback RMSE [m]",
-               "fallback in 2sig h", "IMU filter RMSE [m]", "IMU filter in 2sig h", "fused", "LOS fused", "NLOS FA", "NLOS P",
-               "NLOS R"},
+               "fallback in 2sig h", "IMU filter RMSE [m]", "IMU filter in 2sig h", "fused", "LOS fused", "NLOS FA",
+               "NLOS P", "NLOS R"},
               t2, markdown);
   // Sparse anchors (cells where the vehicle sometimes hears fewer than 3 anchors).
   std::vector<std::vector<std::string>> t3;
