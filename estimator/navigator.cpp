@@ -293,12 +293,22 @@ Vec3 Navigator::model_lever(int tag_index) const {
   return c.transpose() * Vec3(0, 0, (c * lev).z());
 }
 
+Real Navigator::survey_sigma_m() const {
+  // A commissioned offset already holds the survey error's projection on the
+  // commissioning drive's lines of sight; what it leaves as the line of sight
+  // turns is what the commissioning measured (docs/commissioning.md
+  // "Systematic sigma"). Uncalibrated, or not measured: the survey's own sigma.
+  const Real sys = site_.range_systematic_sigma_m;
+  return std::isfinite(site_.range_offset_sigma_m) && std::isfinite(sys) ? sys : cfg_.survey_sigma;
+}
+
 Real Navigator::anchor_bias_prior_var() const {
   // Antenna delay (or the commissioned offset's residual) plus the survey error
   // along whatever line of sight the anchor is first seen on.
   const Real cal = site_.range_offset_sigma_m;
   const Real ad = std::isfinite(cal) ? cal : cfg_.anchor_bias_sigma;
-  return ad * ad + cfg_.survey_sigma * cfg_.survey_sigma;
+  const Real survey = survey_sigma_m();
+  return ad * ad + survey * survey;
 }
 
 Real Navigator::tag_bias_prior_var() const {
@@ -657,7 +667,8 @@ void Navigator::range_error_process_noise(int slot, int anchor_index, int tag_in
       const Real n_now = d_now.norm();
       const Real n_prev = d_prev.norm();
       if (n_now > Real(1e-3) && n_prev > Real(1e-3)) {
-        q += cfg_.survey_sigma * cfg_.survey_sigma * (d_now / n_now - d_prev / n_prev).norm() +
+        const Real survey = survey_sigma_m();
+        q += survey * survey * (d_now / n_now - d_prev / n_prev).norm() +
              cfg_.scale_sigma * cfg_.scale_sigma * kScaleCorrDist_m * std::fabs(n_now - n_prev);
       }
     }

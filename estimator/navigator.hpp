@@ -325,6 +325,9 @@ class Navigator {
   int lend_bias_slot(int anchor_index, uint64_t t_us);
   void range_error_process_noise(int slot, int anchor_index, int tag_index, uint64_t t_us, const Vec3& tag_pos_nav_m);
   void learn_noise(int anchor_index, int tag_index, uint64_t t_us, Real innovation, Real hph, bool fused);
+  // Per-axis survey error the range errors carry [m]: the commissioning's
+  // measured systematic sigma on a calibrated site that has one, else uwb.survey_sigma.
+  Real survey_sigma_m() const;
   Real anchor_bias_prior_var() const;
   Real tag_bias_prior_var() const;
   Real known_offset_m(int anchor_index, int tag_index) const;

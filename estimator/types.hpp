@@ -131,6 +131,11 @@ struct SiteConfig {
   // site is uncalibrated (offsets all zero, the filter's own bias prior applies).
   float range_offset_m[kMaxAnchors][kMaxTags] = {};
   float range_offset_sigma_m = kNaNf;
+  // The range error the commissioned offsets leave as the line of sight
+  // changes (measured by `uwbnav calibrate` from its slowly varying residuals)
+  // [m]; the filter carries it in place of uwb.survey_sigma. NaN: not
+  // measured, uwb.survey_sigma applies.
+  float range_systematic_sigma_m = kNaNf;
   // GNSS antenna position in the body frame (FLU) [m]; meta.ini `gnss_lever_m`.
   Vec3f gnss_lever_body_m;
 

@@ -12,11 +12,14 @@ namespace {
 
 // The commissioned range calibration of the board's site (docs/commissioning.md)
 // is usable: either uncalibrated (sigma NaN, every offset zero) or a sigma in
-// (0, 1] m with every offset of the site's pairs finite and within +-10 m.
+// (0, 1] m with every offset of the site's pairs finite and within +-10 m; a
+// systematic sigma, when given, belongs to a calibrated site and is in [0, 1] m.
 bool site_calibration_valid(const SiteConfig& site) {
   const float sigma = site.range_offset_sigma_m;
   const bool calibrated = !std::isnan(sigma);
   if (calibrated && !(sigma > 0.0F && sigma <= 1.0F)) return false;
+  const float sys = site.range_systematic_sigma_m;
+  if (!std::isnan(sys) && !(calibrated && sys >= 0.0F && sys <= 1.0F)) return false;
   for (size_t a = 0; a < kMaxAnchors; ++a) {
     for (size_t t = 0; t < kMaxTags; ++t) {
       const float v = site.range_offset_m[a][t];

@@ -701,6 +701,9 @@ bool Console::step_cal(size_t step) {
     begin("cal");
     add(" status=%s pairs=%lu", calibrated ? "calibrated" : "uncalibrated", static_cast<unsigned long>(pairs));
     if (calibrated) add_fixed(" sigma_m=", site.range_offset_sigma_m, 4);
+    if (calibrated && !std::isnan(site.range_systematic_sigma_m)) {
+      add_fixed(" systematic_sigma_m=", site.range_systematic_sigma_m, 4);
+    }
     reply_end();
     return pairs > 0;
   }

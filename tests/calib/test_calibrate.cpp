@@ -102,6 +102,39 @@ TEST(CalibrateSelf, RecoversOffsetsWithoutReferenceInsideTheAnchorHull) {
   EXPECT_NEAR(r.body_z_m[0], 0.0, 0.05);
 }
 
+TEST(CalibrateTruth, SystematicSigmaMeasuresTheSurveyErrorThatTheOffsetsCannotHold) {
+  // An anchor surveyed d off moves its ranges by -u.d: a pair's offset holds
+  // the mean over the drive's lines of sight u, the rest changes as u turns
+  // and stays in the residuals against the reference, correlated from one
+  // range to the next. The white ranging noise (5 cm) and the 1 cm
+  // quantisation do not correlate.
+  double measured[2] = {0.0, 0.0};
+  const double survey_sigma_m[2] = {0.0, 0.05};
+  for (int k = 0; k < 2; ++k) {
+    const TrolleyRecording t = make_trolley(15, 60.0, true, 0.0, "1.5 1.2 0 0", survey_sigma_m[k]);
+    calib::Result r;
+    std::string err;
+    ASSERT_EQ(calib::calibrate({t.rec}, calib::Options{}, r, &err), Status::kOk) << err;
+    ASSERT_EQ(r.method, calib::Method::kTruth);
+    measured[k] = r.systematic_sigma_m;
+    const dataset::CalibrationFile f = calib::to_calibration_file(r, {"trolley_test"});
+    EXPECT_FLOAT_EQ(f.systematic_sigma_m, static_cast<float>(r.systematic_sigma_m));
+    // A self-calibration's trajectory bends to part of the survey error: it
+    // measures the figure too, but its file does not carry it.
+    TrolleyRecording self = t;
+    self.rec.truth.clear();
+    calib::Result rs;
+    ASSERT_EQ(calib::calibrate({self.rec}, calib::Options{}, rs, &err), Status::kOk) << err;
+    ASSERT_EQ(rs.method, calib::Method::kSelf);
+    EXPECT_TRUE(std::isnan(calib::to_calibration_file(rs, {"trolley_test"}).systematic_sigma_m));
+  }
+  std::printf("systematic sigma: %.4f m surveyed exactly, %.4f m surveyed to 5 cm\n", measured[0], measured[1]);
+  EXPECT_LT(measured[0], 0.01);  // parked quantisation and the reference's own interpolation remain
+  EXPECT_GT(measured[1], 0.015);
+  EXPECT_GT(measured[1], 2.5 * measured[0]);
+  EXPECT_LT(measured[1], 0.05);  // what the offsets hold is gone: less than the survey error itself
+}
+
 TEST(CalibrateSelf, FarOutsideTheAnchorsTheCommonOffsetIsTheReportedGaugeAndCanBeFixed) {
   // The same loop 40 m north of the room: every anchor lies within +-6 deg of
   // south, so lengthening every range is nearly the same as moving north.

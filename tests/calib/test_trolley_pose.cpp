@@ -109,6 +109,90 @@ TEST(TrolleyPose, CommissionedTrolleyWithoutImuTakesItsHeadingFromTheTagsFusesTh
   EXPECT_GT(p.fused, 0.95);
 }
 
+TEST(TrolleyPose, CommissionedTrolleyOnALabFloorClaimsASigmaNeitherTooSmallNorFarTooLarge) {
+  // GIVEN tuning drive trolley3:23 of the family cell (anchors surveyed to
+  // 0-2 cm, a level floor), commissioned on itself against its reference
+  // trajectory (motion capture: uwbnav calibrate --method truth)
+  sim::SimOutput so;
+  std::string err;
+  ASSERT_EQ(sim::simulate_family("trolley3", 23, sim::FamilyOptions{}, so, &err), Status::kOk) << err;
+  calib::Options opt;
+  opt.method = calib::Method::kTruth;
+  calib::Result cal;
+  ASSERT_EQ(calib::calibrate({so.rec}, opt, cal, &err), Status::kOk) << err;
+  dataset::CalibrationFile file = calib::to_calibration_file(cal, {"trolley3_23"});
+  ASSERT_TRUE(std::isfinite(file.systematic_sigma_m));
+  // The trolley's own tilt prior: a lab floor, not a car's suspension
+  // (docs/commissioning.md "Platform settings").
+  Params params;
+  ASSERT_EQ(params.set(ParamId::kEkfLevelSigma, 0.005F), Status::kOk);
+  auto run = [&](const dataset::CalibrationFile& f) {
+    dataset::Recording rec = so.rec;
+    std::vector<std::string> errors;
+    EXPECT_EQ(dataset::check_calibration(f, rec.site, "t.cal", errors), Status::kOk);
+    dataset::apply_calibration(f, rec.site);
+    const test::RunScore s = test::replay(rec, params);
+    EXPECT_TRUE(s.all_finite);
+    return std::make_pair(score(rec, s, 0.0), s.mean_sigma_h_m);
+  };
+  // WHEN the navigator runs it with the commissioning's measured systematic
+  // sigma, and with the same file without it (uwb.survey_sigma, 0.1 m, stays)
+  const auto [p, sigma_h_m] = run(file);
+  file.systematic_sigma_m = kNaNf;
+  const auto [p_survey, sigma_survey_h_m] = run(file);
+  std::printf("trolley3:23 commissioned, lab floor: rmse %.3f m, sigma %.3f m, in 2 sigma %.2f %%; with "
+              "uwb.survey_sigma instead of the measured sigma: rmse %.3f m, sigma %.3f m, in 2 sigma %.2f %%\n",
+              p.rmse_h_m, sigma_h_m, 100.0 * p.inside_2sigma, p_survey.rmse_h_m, sigma_survey_h_m,
+              100.0 * p_survey.inside_2sigma);
+  // THEN the claimed 2 sigma holds in issue 19's band (90-99.9 %; measured
+  // 99.82 %), where the survey prior of an unknown site made it hold always
+  // at three times the sigma (100.00 %). The RMSE is 1.3 times that with the
+  // survey prior (0.015 against 0.011 m): the 0.1 m consider variance had also
+  // been smoothing a ranges-only model with a car's process noise (docs/ekf.md
+  // "Ranges-only process noise: measured and not kept")
+  EXPECT_GT(p.inside_2sigma, 0.90);
+  EXPECT_LT(p.inside_2sigma, 0.999);
+  EXPECT_LT(sigma_h_m, 0.5 * sigma_survey_h_m);
+  EXPECT_LT(p.rmse_h_m, 0.03);
+  EXPECT_LT(p.rmse_h_m, 1.5 * p_survey.rmse_h_m);
+}
+
+TEST(TrolleyPose, BadlySurveyedSiteStaysHonestCommissionedWithOrWithoutAReference) {
+  // GIVEN a site whose anchors are surveyed to 5 cm per axis, a lab floor
+  TrolleyRecording t = make_trolley(44, 60.0, true, 0.0, "1.5 1.2 0 0", 0.05);
+  Params params;
+  ASSERT_EQ(params.set(ParamId::kEkfLevelSigma, 0.005F), Status::kOk);
+  ASSERT_EQ(params.set(ParamId::kUwbSurveySigma, 0.05F), Status::kOk);  // the survey report's figure
+  struct Case {
+    const char* how;
+    bool reference;
+  };
+  for (const Case c : {Case{"self-calibration (the survey's sigma stays)", false},
+                       Case{"reference trajectory (the measured systematic sigma)", true}}) {
+    // WHEN the drive is commissioned on itself and run with that calibration
+    dataset::Recording commissioning = t.rec;
+    if (!c.reference) commissioning.truth.clear();
+    calib::Result cal;
+    std::string err;
+    ASSERT_EQ(calib::calibrate({commissioning}, calib::Options{}, cal, &err), Status::kOk) << err;
+    const dataset::CalibrationFile file = calib::to_calibration_file(cal, {"trolley_test"});
+    EXPECT_EQ(std::isfinite(file.systematic_sigma_m), c.reference) << c.how;
+    dataset::Recording rec = t.rec;
+    std::vector<std::string> errors;
+    ASSERT_EQ(dataset::check_calibration(file, rec.site, "t.cal", errors), Status::kOk) << errors.at(0);
+    dataset::apply_calibration(file, rec.site);
+    const test::RunScore s = test::replay(rec, params);
+    ASSERT_TRUE(s.all_finite);
+    const PoseScore p = score(rec, s, 10.0);
+    std::printf("surveyed to 5 cm, %s: systematic sigma %.4f m, rmse %.3f m, sigma %.3f m, in 2 sigma %.1f %%\n",
+                c.how, cal.systematic_sigma_m, p.rmse_h_m, s.mean_sigma_h_m, 100.0 * p.inside_2sigma);
+    // THEN the claim covers the error. (Had the self-calibration's figure,
+    // 7 mm, replaced the survey's: 39 mm of error at a claimed 30 mm, 78 %.)
+    EXPECT_GT(p.inside_2sigma, 0.90) << c.how;
+    EXPECT_LT(p.rmse_h_m, 0.08) << c.how;
+  }
+}
+
 TEST(TrolleyPose, HeightConstraintDoesNotTeachTheRangeOffsetsOfARangesOnlyFilterAtRest) {
   // GIVEN a tuning drive of the trolley3 family cell (seed 56), commissioned
   // by self-calibration on itself; it stands still for its first 14 s. The

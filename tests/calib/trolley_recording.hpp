@@ -25,8 +25,9 @@ struct TrolleyRecording {
 // start; otherwise parked for the whole run. `outlier_prob`: gross positive
 // outliers per range (NLOS-like), 0 for a clean line-of-sight lab.
 // `start`: "X Y Z HEADING_DEG" of the body origin at t = 0.
+// `survey_sigma_m`: anchors.csv holds the true positions plus this error per axis.
 inline std::string trolley_scenario(double duration_s, bool moving, double outlier_prob,
-                                    const std::string& start = "1.5 1.2 0 0") {
+                                    const std::string& start = "1.5 1.2 0 0", double survey_sigma_m = 0.0) {
   std::string s = R"(
 [scenario]
 name = trolley_test
@@ -58,6 +59,7 @@ body_block = 0
 )";
   s += "start = " + start + "\n";
   s += "[scenario]\nduration_s = " + std::to_string(duration_s) + "\n";
+  s += "[site]\nsurvey_sigma_m = " + std::to_string(survey_sigma_m) + "\n";
   s += "[nlos]\noutlier_prob = " + std::to_string(outlier_prob) + "\noutlier_min_m = 0.5\noutlier_max_m = 5\n";
   if (moving) {
     s += R"([route]
@@ -85,11 +87,13 @@ inline double trolley_true_offset(size_t anchor_index, size_t tag_index) {
 }
 
 inline TrolleyRecording make_trolley(uint64_t seed, double duration_s = 60.0, bool moving = true,
-                                     double outlier_prob = 0.0, const std::string& start = "1.5 1.2 0 0") {
+                                     double outlier_prob = 0.0, const std::string& start = "1.5 1.2 0 0",
+                                     double survey_sigma_m = 0.0) {
   TrolleyRecording out;
   sim::Scenario sc;
   std::string err;
-  EXPECT_TRUE(ok(sim::parse_scenario(trolley_scenario(duration_s, moving, outlier_prob, start), "trolley", sc, &err))) << err;
+  const std::string text = trolley_scenario(duration_s, moving, outlier_prob, start, survey_sigma_m);
+  EXPECT_TRUE(ok(sim::parse_scenario(text, "trolley", sc, &err))) << err;
   EXPECT_TRUE(ok(sim::validate_scenario(sc, &err))) << err;
   sim::SimOptions opt;
   opt.seed = seed;

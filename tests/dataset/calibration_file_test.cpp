@@ -83,6 +83,31 @@ TEST(CalibrationFile, WrittenFileReadsBackAndFillsSiteOffsetsByPairIndex) {
   EXPECT_EQ(back.site_crc32, site_crc32(site));
 }
 
+TEST(CalibrationFile, SystematicSigmaIsOptionalRoundsUpAndReachesTheSiteOnlyWhenGiven) {
+  CalibrationFile cal;
+  cal.site_sigma_m = 0.004F;
+  cal.pairs = {{7, 0, 0.15F, 0.002F}, {7, 1, 0.18F, 0.003F}, {9, 0, 0.21F, 0.002F}, {9, 1, 0.24F, 0.004F}};
+  // Not measured (a file of an older tool, or written by hand): no line, and
+  // the site keeps NaN, so the filter keeps uwb.survey_sigma.
+  EXPECT_EQ(format_calibration(cal).find("systematic_sigma_m"), std::string::npos);
+  const std::string path = testutil::scratch_dir() + "/systematic.cal";
+  ASSERT_EQ(write_calibration(path, cal), Status::kOk);
+  SiteConfig loaded = two_by_two();
+  std::vector<std::string> errors;
+  ASSERT_EQ(load_calibration(path, loaded, errors), Status::kOk) << dump(errors);
+  EXPECT_TRUE(std::isnan(loaded.range_systematic_sigma_m));
+  // Measured: written rounded up, read back into the site.
+  cal.systematic_sigma_m = 0.00312F;
+  EXPECT_NE(format_calibration(cal).find("systematic_sigma_m = 0.0032\n"), std::string::npos) << format_calibration(cal);
+  ASSERT_EQ(write_calibration(path, cal), Status::kOk);
+  ASSERT_EQ(load_calibration(path, loaded, errors), Status::kOk) << dump(errors);
+  EXPECT_FLOAT_EQ(loaded.range_systematic_sigma_m, 0.0032F);
+  EXPECT_FLOAT_EQ(loaded.range_offset_sigma_m, 0.004F);
+  // Zero is a measurement too (noise-free simulation): written as the 0.1 mm floor.
+  cal.systematic_sigma_m = 0.0F;
+  EXPECT_NE(format_calibration(cal).find("systematic_sigma_m = 0.0001\n"), std::string::npos) << format_calibration(cal);
+}
+
 TEST(CalibrationFile, SigmasAreRoundedUpNeverDownWhenWritten) {
   CalibrationFile cal;
   cal.site_sigma_m = 0.00411F;
@@ -133,6 +158,12 @@ TEST(CalibrationFile, MalformedInputIsRefusedWithFileLineAndReason) {
        "site.cal:3: key 'Site Sigma' is not [a-z0-9_]+"},
       {std::string(kCalibrationMagic) + "\nsite_sigma_m = 0.01\nsite_crc32 = 1234\nanchor_id,tag_id,offset_m,sigma_m\n" + kRows,
        "site.cal:3: site_crc32 '1234' is not 0x followed by hex digits"},
+      {std::string(kCalibrationMagic) + "\nsite_sigma_m = 0.01\nsystematic_sigma_m = -0.01\nanchor_id,tag_id,offset_m,sigma_m\n" + kRows,
+       "site.cal:3: systematic_sigma_m -0.01 is not in [0, 1] m"},
+      {std::string(kCalibrationMagic) + "\nsite_sigma_m = 0.01\nsystematic_sigma_m = 1.5\nanchor_id,tag_id,offset_m,sigma_m\n" + kRows,
+       "site.cal:3: systematic_sigma_m 1.5 is not in [0, 1] m"},
+      {std::string(kCalibrationMagic) + "\nsite_sigma_m = 0.01\nsystematic_sigma_m = nan\nanchor_id,tag_id,offset_m,sigma_m\n" + kRows,
+       "site.cal:3: systematic_sigma_m is NaN"},
       {kHead + "7,0,0.15\n", "site.cal:4: 3 cells, expected 4"},
       {kHead + "7,0,0.15,0.002,9\n", "site.cal:4: 5 cells, expected 4"},
       {kHead + "x,0,0.15,0.002\n", "site.cal:4: anchor_id 'x' is not an integer in 0..65535"},

@@ -85,6 +85,20 @@ TEST(FirmwareSiteCalibration, UsableCalibrationsStartAndUnusableOnesAreRefusedBe
     EXPECT_EQ(init_status(bad, &ran), Status::kInvalidArgument) << b.what;
     EXPECT_FALSE(ran) << b.what;
   }
+  // The commissioning's systematic sigma: part of a calibration, in [0, 1] m.
+  s.range_systematic_sigma_m = 0.003F;
+  EXPECT_EQ(init_status(s, &ran), Status::kOk);
+  EXPECT_TRUE(ran);
+  for (const float sys : {-0.001F, 1.5F, INFINITY}) {
+    SiteConfig bad = s;
+    bad.range_systematic_sigma_m = sys;
+    EXPECT_EQ(init_status(bad, &ran), Status::kInvalidArgument) << sys;
+    EXPECT_FALSE(ran) << sys;
+  }
+  SiteConfig uncalibrated = square_site();
+  uncalibrated.range_systematic_sigma_m = 0.003F;
+  EXPECT_EQ(init_status(uncalibrated, &ran), Status::kInvalidArgument) << "systematic sigma on an uncalibrated site";
+  EXPECT_FALSE(ran);
 }
 
 TEST(FirmwareSiteCalibration, LoadedFileFillsTheSiteTheReplayBoardHandsTheFirmware) {

@@ -77,6 +77,10 @@ struct PairResult {
   double inflation = 1.0;    // sigma_m / ls_sigma_m: sqrt(max(AR(1) factor, batch factor)) [-]
   double scale_m = 0.0;      // robust scale (1.4826 MAD) of its residuals [m]
   double resid_rms_m = 0.0;  // RMS of the used residuals [m]
+  // The slowly varying part of the residuals left after the offset (survey
+  // error along the changing line of sight, multipath): square root of the
+  // lag-1 autocovariance of its full-weight residuals in time order [m].
+  double slow_sigma_m = 0.0;
   bool observable = false;
 };
 
@@ -104,6 +108,12 @@ struct Result {
   std::vector<PairResult> pairs;     // anchor-major, tag-minor over the site's tables
   Decomposition decomposition;
   double common_sigma_m = 0.0;       // 1-sigma of the mean of all offsets [m]
+  // RMS of slow_sigma_m over the pairs that have consecutive full-weight
+  // ranges: the range error a commissioned offset leaves on the commissioned
+  // lines of sight; from a reference trajectory (kTruth) the file carries it
+  // and the filter uses it in place of uwb.survey_sigma
+  // (docs/commissioning.md "Systematic sigma") [m]
+  double systematic_sigma_m = 0.0;
   std::vector<WeakDirection> weak;
   bool observable = false;           // every pair's sigma <= max_sigma_m
   size_t ranges_total = 0;           // ranges in the recordings
@@ -130,7 +140,8 @@ struct Result {
 [[nodiscard]] Status calibrate(const std::vector<dataset::Recording>& recs, const Options& options, Result& result,
                                std::string* error);
 
-// The calibration file of an observable result (site sigma = the largest pair sigma).
+// The calibration file of an observable result (site sigma = the largest pair
+// sigma; the systematic sigma from a reference trajectory only).
 dataset::CalibrationFile to_calibration_file(const Result& result, const std::vector<std::string>& sources);
 
 // Human-readable report: method, residual statistics, per pair offsets with

@@ -200,6 +200,16 @@ Status parse_calibration(const std::string& text, const std::string& name, Calib
           out.site_sigma_m = static_cast<float>(v);
           sigma_line = line_no;
         }
+      } else if (key == "systematic_sigma_m") {
+        double v = 0.0;
+        std::string why;
+        if (!parse_number(value, "systematic_sigma_m", v, why)) {
+          err.add(line_no, why);
+        } else if (!(v >= 0.0) || v > 1.0) {
+          err.add(line_no, "systematic_sigma_m " + value + " is not in [0, 1] m");
+        } else {
+          out.systematic_sigma_m = static_cast<float>(v);
+        }
       } else if (key == "site_crc32") {
         const char* b = value.data();
         const char* e = b + value.size();
@@ -333,6 +343,7 @@ void apply_calibration(const CalibrationFile& cal, SiteConfig& site) {
     if (a >= 0 && t >= 0) site.range_offset_m[a][t] = p.offset_m;
   }
   site.range_offset_sigma_m = cal.site_sigma_m;
+  site.range_systematic_sigma_m = cal.systematic_sigma_m;
 }
 
 Status load_calibration(const std::string& path, SiteConfig& site, std::vector<std::string>& errors) {
@@ -354,6 +365,10 @@ std::string format_calibration(const CalibrationFile& cal) {
   char buf[160];
   std::snprintf(buf, sizeof buf, "site_sigma_m = %.4f\n", ceil_sigma(static_cast<double>(cal.site_sigma_m)));
   s += buf;
+  if (std::isfinite(cal.systematic_sigma_m)) {
+    std::snprintf(buf, sizeof buf, "systematic_sigma_m = %.4f\n", ceil_sigma(static_cast<double>(cal.systematic_sigma_m)));
+    s += buf;
+  }
   if (cal.has_site_crc) {
     std::snprintf(buf, sizeof buf, "site_crc32 = 0x%08" PRIx32 "\n", cal.site_crc32);
     s += buf;

@@ -29,6 +29,9 @@ struct CalibrationPair {
 
 struct CalibrationFile {
   float site_sigma_m = kNaNf;      // 1-sigma the firmware assumes for every offset [m] (>= each pair's sigma_m)
+  // 1-sigma of the range error the offsets leave on the commissioned lines of
+  // sight (optional line; NaN: not given, the filter keeps uwb.survey_sigma) [m]
+  float systematic_sigma_m = kNaNf;
   bool has_site_crc = false;       // site_crc32 line present
   uint32_t site_crc32 = 0;         // site_crc32() of the survey the offsets were made for
   size_t site_crc_line = 0;
@@ -53,14 +56,15 @@ uint32_t site_crc32(const SiteConfig& site);
 [[nodiscard]] Status check_calibration(const CalibrationFile& cal, const SiteConfig& site, const std::string& name,
                                        std::vector<std::string>& errors);
 
-// Fills site.range_offset_m / range_offset_sigma_m from a checked file.
+// Fills site.range_offset_m / range_offset_sigma_m / range_systematic_sigma_m from a checked file.
 void apply_calibration(const CalibrationFile& cal, SiteConfig& site);
 
 // read_file + parse + check + apply. On failure `site` is left unchanged.
 [[nodiscard]] Status load_calibration(const std::string& path, SiteConfig& site, std::vector<std::string>& errors);
 
 // Writes the file (creating or replacing `path`): magic line, site_sigma_m,
-// site_crc32 (when set), the `info` lines, then the pair table.
+// systematic_sigma_m (when set), site_crc32 (when set), the `info` lines, then
+// the pair table.
 [[nodiscard]] Status write_calibration(const std::string& path, const CalibrationFile& cal);
 
 // Text of a calibration file (what write_calibration writes).
