@@ -54,5 +54,30 @@ TEST(ConsoleCal, LoadedCalibrationFileIsShownPerPairWithTheSiteSigma) {
   EXPECT_EQ(reply_lines(rig.command("cal x")).at(0), "error: cal: takes no arguments");
 }
 
+TEST(ConsoleCal, ReferenceCommissionedFileAlsoShowsItsMeasuredSystematicSigma) {
+  dataset::Recording rec = truncated(sim_recording(), 1.0);
+  const SiteConfig& s = rec.site;
+  std::string text = std::string(dataset::kCalibrationMagic) +
+                     "\nsite_sigma_m = 0.0125\nsystematic_sigma_m = 0.0061\nanchor_id,tag_id,offset_m,sigma_m\n";
+  for (size_t a = 0; a < s.num_anchors; ++a) {
+    for (size_t t = 0; t < s.num_tags; ++t) {
+      char row[96];
+      std::snprintf(row, sizeof row, "%u,%u,0.1000,0.0100\n", static_cast<unsigned>(s.anchors[a].id),
+                    static_cast<unsigned>(s.tags[t].id));
+      text += row;
+    }
+  }
+  dataset::CalibrationFile cal;
+  std::vector<std::string> errors;
+  ASSERT_EQ(dataset::parse_calibration(text, "site.cal", cal, errors), Status::kOk) << errors.at(0);
+  ASSERT_EQ(dataset::check_calibration(cal, rec.site, "site.cal", errors), Status::kOk) << errors.at(0);
+  dataset::apply_calibration(cal, rec.site);
+  ConsoleRig rig(rec);
+  const auto lines = reply_lines(rig.command("cal"));
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(lines[0], "cal status=calibrated pairs=" + std::to_string(s.num_anchors * s.num_tags) +
+                          " sigma_m=0.0125 systematic_sigma_m=0.0061");
+}
+
 }  // namespace
 }  // namespace uwbnav::testing
