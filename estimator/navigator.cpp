@@ -298,8 +298,8 @@ Real Navigator::survey_sigma_m() const {
   // commissioning drive's lines of sight; what it leaves as the line of sight
   // turns is what the commissioning measured (docs/commissioning.md
   // "Systematic sigma"). Uncalibrated, or not measured: the survey's own sigma.
-  const Real sys = site_.range_systematic_sigma_m;
-  return std::isfinite(site_.range_offset_sigma_m) && std::isfinite(sys) ? sys : cfg_.survey_sigma;
+  const Real sys_m = site_.range_systematic_sigma_m;
+  return std::isfinite(site_.range_offset_sigma_m) && std::isfinite(sys_m) ? sys_m : cfg_.survey_sigma;
 }
 
 Real Navigator::anchor_bias_prior_var() const {

@@ -18,8 +18,8 @@ bool site_calibration_valid(const SiteConfig& site) {
   const float sigma = site.range_offset_sigma_m;
   const bool calibrated = !std::isnan(sigma);
   if (calibrated && !(sigma > 0.0F && sigma <= 1.0F)) return false;
-  const float sys = site.range_systematic_sigma_m;
-  if (!std::isnan(sys) && !(calibrated && sys >= 0.0F && sys <= 1.0F)) return false;
+  const float sys_m = site.range_systematic_sigma_m;
+  if (!std::isnan(sys_m) && !(calibrated && sys_m >= 0.0F && sys_m <= 1.0F)) return false;
   for (size_t a = 0; a < kMaxAnchors; ++a) {
     for (size_t t = 0; t < kMaxTags; ++t) {
       const float v = site.range_offset_m[a][t];

@@ -145,7 +145,7 @@ TEST(TrolleyPose, CommissionedTrolleyOnALabFloorClaimsASigmaNeitherTooSmallNorFa
               p.rmse_h_m, sigma_h_m, 100.0 * p.inside_2sigma, p_survey.rmse_h_m, sigma_survey_h_m,
               100.0 * p_survey.inside_2sigma);
   // THEN the claimed 2 sigma holds in issue 19's band (90-99.9 %; measured
-  // 99.82 %), where the survey prior of an unknown site made it hold always
+  // 99.78 %), where the survey prior of an unknown site made it hold always
   // at three times the sigma (100.00 %). The RMSE is 1.3 times that with the
   // survey prior (0.015 against 0.011 m): the 0.1 m consider variance had also
   // been smoothing a ranges-only model with a car's process noise (docs/ekf.md

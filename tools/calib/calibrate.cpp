@@ -791,8 +791,10 @@ void Solver::finish(const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& ld
   // of independent residuals): errors that persist for seconds (reference
   // errors, multipath) average out far slower than white noise.
   std::vector<double> num(np_, 0.0);
-  std::vector<double> slow(np_, 0.0);
+  std::vector<double> slow_m2(np_, 0.0);   // lag-1 products of full-weight residuals [m^2]
   std::vector<size_t> nlag(np_, 0);
+  std::vector<double> mean_fw_m(np_, 0.0);  // mean of the full-weight residuals [m]
+  std::vector<size_t> cnt_fw(np_, 0);
   std::vector<double> den(np_, 0.0);
   std::vector<double> mean(np_, 0.0);
   std::vector<size_t> cnt(np_, 0);
@@ -803,6 +805,13 @@ void Solver::finish(const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& ld
     }
   }
   for (size_t p = 0; p < np_; ++p) mean[p] = cnt[p] > 0 ? mean[p] / static_cast<double>(cnt[p]) : 0.0;
+  for (const Obs& o : obs_) {
+    if (o.weight >= 1.0) {
+      mean_fw_m[o.pair] += o.resid;
+      ++cnt_fw[o.pair];
+    }
+  }
+  for (size_t p = 0; p < np_; ++p) mean_fw_m[p] = cnt_fw[p] > 0 ? mean_fw_m[p] / static_cast<double>(cnt_fw[p]) : 0.0;
   std::vector<const Obs*> last(np_, nullptr);
   // Blocks keyed by (pair, recording, block index): sum and count of residuals.
   std::vector<std::vector<std::pair<uint64_t, std::pair<double, size_t>>>> blocks(np_);
@@ -822,11 +831,11 @@ void Solver::finish(const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& ld
     const Obs* l = last[o.pair];
     if (l != nullptr && l->rec == o.rec && o.t_s - l->t_s < 1.0) {
       num[o.pair] += e * (l->resid - mean[o.pair]);
-      // The systematic error: full-weight neighbours only. A down-weighted
-      // residual is an NLOS episode or an outlier (gated by the filter, not
-      // part of what a LOS range carries).
+      // The systematic error: full-weight neighbours only, about their own
+      // mean. A down-weighted residual is an NLOS episode or an outlier (gated
+      // by the filter, not part of what a LOS range carries).
       if (o.weight >= 1.0 && l->weight >= 1.0) {
-        slow[o.pair] += e * (l->resid - mean[o.pair]);
+        slow_m2[o.pair] += (o.resid - mean_fw_m[o.pair]) * (l->resid - mean_fw_m[o.pair]);
         ++nlag[o.pair];
       }
     }
@@ -850,8 +859,9 @@ void Solver::finish(const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& ld
     pr.rho = den[p] > 0.0 ? std::max(0.0, std::min(kMaxRho, num[p] / den[p])) : 0.0;
     // White noise does not correlate from one range to the next; what does is
     // the error that changes slowly with the geometry: its variance is the
-    // lag-1 autocovariance (full-weight ranges of the pair within 1 s of each other).
-    pr.slow_sigma_m = nlag[p] > 0 ? std::sqrt(std::max(0.0, slow[p] / static_cast<double>(nlag[p]))) : 0.0;
+    // lag-1 autocovariance (full-weight ranges of the pair within 1 s of each
+    // other; docs/commissioning.md "Systematic sigma").
+    pr.slow_sigma_m = nlag[p] > 0 ? std::sqrt(std::max(0.0, slow_m2[p] / static_cast<double>(nlag[p]))) : 0.0;
     double factor = (1.0 + pr.rho) / (1.0 - pr.rho);
     if (blocks[p].size() >= kMinBlocks && den[p] > 0.0 && pr.used > 0) {
       // var(mean) from the blocks, sum_b (n_b m_b)^2 / n^2 (m_b: block mean of
@@ -879,15 +889,17 @@ void Solver::finish(const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& ld
   }
   const Eigen::VectorXd ones = Eigen::VectorXd::Ones(npi) / static_cast<double>(np_);
   res_.common_sigma_m = std::sqrt(std::max(0.0, ones.dot(cov * ones)));
-  // RMS over the pairs that have consecutive full-weight ranges.
-  double slow_sq = 0.0;
+  // RMS over the pairs that have consecutive full-weight ranges
+  // (docs/commissioning.md "Systematic sigma"); NaN: none has, not measured.
+  double slow_sq_m2 = 0.0;
   size_t slow_pairs = 0;
   for (size_t p = 0; p < np_; ++p) {
     if (nlag[p] == 0) continue;
-    slow_sq += res_.pairs[p].slow_sigma_m * res_.pairs[p].slow_sigma_m;
+    slow_sq_m2 += res_.pairs[p].slow_sigma_m * res_.pairs[p].slow_sigma_m;
     ++slow_pairs;
   }
-  res_.systematic_sigma_m = slow_pairs > 0 ? std::sqrt(slow_sq / static_cast<double>(slow_pairs)) : 0.0;
+  res_.systematic_sigma_m = slow_pairs > 0 ? std::sqrt(slow_sq_m2 / static_cast<double>(slow_pairs))
+                                           : std::numeric_limits<double>::quiet_NaN();
   describe_weak(cov);
   for (size_t r = 0; r < zcol_.size(); ++r) {
     if (zcol_[r] >= 0) res_.body_z_m.push_back(zg_[r]);
@@ -1218,7 +1230,11 @@ dataset::CalibrationFile to_calibration_file(const Result& result, const std::ve
   // anchors surveyed to 5 cm, 7 mm seen, the filter's error 39 mm at a claimed
   // 30 mm), and a few static points see few lines of sight. Without it the
   // filter keeps uwb.survey_sigma.
-  if (result.method == Method::kTruth) f.systematic_sigma_m = static_cast<float>(result.systematic_sigma_m);
+  // A figure beyond the file's 1 m bound is no survey error: left out too.
+  if (result.method == Method::kTruth && std::isfinite(result.systematic_sigma_m) &&
+      result.systematic_sigma_m <= 1.0) {
+    f.systematic_sigma_m = static_cast<float>(result.systematic_sigma_m);
+  }
   f.has_site_crc = true;
   f.site_crc32 = dataset::site_crc32(result.site);
   f.info.push_back(std::string("method = ") + method_name(result.method));
@@ -1286,16 +1302,21 @@ void print_report(std::FILE* out, const Result& r, const Options& opt) {
     }
   }
   std::fprintf(out, "common offset (mean of all pairs): 1-sigma %.4f m\n", r.common_sigma_m);
-  double slow_max = 0.0;
-  for (const PairResult& p : r.pairs) slow_max = std::max(slow_max, p.slow_sigma_m);
-  std::fprintf(out,
-               "systematic range error left after the offsets (slowly varying residual): 1-sigma %.4f m (RMS over the "
-               "pairs, max %.4f m); %s\n",
-               r.systematic_sigma_m, slow_max,
-               r.method == Method::kTruth
-                   ? "written to the file: the filter carries it in place of uwb.survey_sigma"
-                   : "not written (only a reference trajectory shows it whole): the filter keeps uwb.survey_sigma, "
-                     "set it from the survey");
+  double slow_max_m = 0.0;
+  for (const PairResult& p : r.pairs) slow_max_m = std::max(slow_max_m, p.slow_sigma_m);
+  if (!std::isfinite(r.systematic_sigma_m)) {
+    std::fprintf(out, "systematic range error left after the offsets: not measured (no pair has consecutive "
+                      "full-weight ranges); the filter keeps uwb.survey_sigma\n");
+  } else {
+    std::fprintf(out,
+                 "systematic range error left after the offsets (slowly varying residual): 1-sigma %.4f m (RMS over "
+                 "the pairs, max %.4f m); %s\n",
+                 r.systematic_sigma_m, slow_max_m,
+                 r.method == Method::kTruth
+                     ? "written to the file: the filter carries it in place of uwb.survey_sigma"
+                     : "not written (only a reference trajectory shows it whole): the filter keeps uwb.survey_sigma, "
+                       "set it from the survey");
+  }
   if (r.observable) {
     std::fprintf(out, "observability: every offset determined to <= %.4f m (1-sigma)\n", opt.max_sigma_m);
   } else {

@@ -112,8 +112,8 @@ struct Result {
   // ranges: the range error a commissioned offset leaves on the commissioned
   // lines of sight; from a reference trajectory (kTruth) the file carries it
   // and the filter uses it in place of uwb.survey_sigma
-  // (docs/commissioning.md "Systematic sigma") [m]
-  double systematic_sigma_m = 0.0;
+  // (docs/commissioning.md "Systematic sigma") [m]; NaN: not measured
+  double systematic_sigma_m = std::numeric_limits<double>::quiet_NaN();
   std::vector<WeakDirection> weak;
   bool observable = false;           // every pair's sigma <= max_sigma_m
   size_t ranges_total = 0;           // ranges in the recordings
