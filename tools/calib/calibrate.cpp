@@ -803,15 +803,15 @@ void Solver::finish(const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& ld
       mean[o.pair] += o.resid;
       ++cnt[o.pair];
     }
-  }
-  for (size_t p = 0; p < np_; ++p) mean[p] = cnt[p] > 0 ? mean[p] / static_cast<double>(cnt[p]) : 0.0;
-  for (const Obs& o : obs_) {
     if (o.weight >= 1.0) {
       mean_fw_m[o.pair] += o.resid;
       ++cnt_fw[o.pair];
     }
   }
-  for (size_t p = 0; p < np_; ++p) mean_fw_m[p] = cnt_fw[p] > 0 ? mean_fw_m[p] / static_cast<double>(cnt_fw[p]) : 0.0;
+  for (size_t p = 0; p < np_; ++p) {
+    mean[p] = cnt[p] > 0 ? mean[p] / static_cast<double>(cnt[p]) : 0.0;
+    mean_fw_m[p] = cnt_fw[p] > 0 ? mean_fw_m[p] / static_cast<double>(cnt_fw[p]) : 0.0;
+  }
   std::vector<const Obs*> last(np_, nullptr);
   // Blocks keyed by (pair, recording, block index): sum and count of residuals.
   std::vector<std::vector<std::pair<uint64_t, std::pair<double, size_t>>>> blocks(np_);
