@@ -151,7 +151,6 @@ Status Navigator::configure(const SiteConfig& site, const Params& params) {
     for (auto& p : row) p = PairRange{};
   }
   for (auto& b : range_rate_) b = RangeRateBlock{};  // indices may name other anchors now
-  first_range_t_us_ = 0;
   r_los_m2_ = cfg_.uwb_sigma_m * cfg_.uwb_sigma_m;
   r_diff_m2_ = r_los_m2_;
   r_sh_m2_ = r_los_m2_;
@@ -213,6 +212,7 @@ void Navigator::update_params(const Params& params) {
   c.cv_turn_psd = static_cast<Real>(params[ParamId::kEkfCvTurnPsd]);
   c.level_sigma = static_cast<Real>(params[ParamId::kEkfLevelSigma]);
   c.init_window_us = param_us(params[ParamId::kEkfInitWindow] * 1e6F);
+  c.init_redundancy_wait_us = param_us(params[ParamId::kEkfInitRedundancyWait] * 1e6F);
   c.init_heading_dist = static_cast<Real>(params[ParamId::kEkfInitHeadingDist]);
   c.init_heading_timeout_us = param_us(params[ParamId::kEkfInitHeadingTimeout] * 1e6F);
   c.planar_spread = static_cast<Real>(params[ParamId::kEkfPlanarSpread]);

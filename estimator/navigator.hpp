@@ -42,6 +42,7 @@ struct NavDiagnostics {
   uint32_t short_range_fails = 0;  // short-range tests failed (ranges from two anchors clearly shorter than predicted)
   uint32_t operator_resets = 0;  // reset() calls (console `reset filter`)
   uint32_t iterated_updates = 0;  // range re-linearisations of the iterated update (metre steps across the line of sight)
+  uint32_t start_height_switches = 0;  // first 3-D fixes replaced by their mirror or the 2-D fix at the start height (start height prior)
   uint64_t last_imu_t_us = 0;
   uint64_t last_range_used_t_us = 0;
   float uwb_sigma_m = 0.0F;      // learned LOS ranging 1-sigma [m]
@@ -176,6 +177,7 @@ class Navigator {
     Real cv_turn_psd = Real(1);     // [rad/s^2/sqrt(Hz)] turn-rate walk without IMU
     Real level_sigma = Real(0.03);  // [rad] ground vehicle without IMU: tilt about level
     uint64_t init_window_us = 300000;
+    uint64_t init_redundancy_wait_us = 1000000;  // first fix: wait this long for two redundant ranges
     Real init_heading_dist = Real(3);
     uint64_t init_heading_timeout_us = 30000000;
     Real planar_spread = Real(1);
@@ -253,7 +255,7 @@ class Navigator {
   void init_on_imu(const ImuSample& imu);
   bool init_track(int anchor_index, int tag_index, const UwbRange& range);
   void begin_imu_recovery();
-  bool try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix);
+  bool try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix, size_t min_dof = 1, bool accept_rejected = false);
   void try_heading(uint64_t t_us);
   Real speed_lower_bound(uint64_t t_us) const;
   Real track_speed_bound(uint64_t t_us) const;
@@ -399,7 +401,7 @@ class Navigator {
   // Initialisation / alignment state.
   PairRange pair_[kMaxAnchors][kMaxTags];
   RangeRateBlock range_rate_[kMaxAnchors];  // kept over restarts: the ranges, not the filter
-  uint64_t first_range_t_us_ = 0;
+  uint64_t fix_wait_from_us_ = 0;  // first range since the latest (re)start: the first fix's redundancy wait [us]
   uint64_t first_imu_t_us_ = 0;
   uint64_t levelled_t_us_ = 0;      // latest levelling from a window's mean specific force [us]
   bool levelled_ = false;

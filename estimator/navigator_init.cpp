@@ -46,6 +46,7 @@ constexpr Real kLevelBiasGain_radps2 = Real(0.01); // ... and its gyro-bias inte
 // horizontal acceleration over 5 s (about 0.8 m/s^2, 0.08 rad) and the gyro
 // bias it has not yet learnt (0.5 deg/s over 5 s, 0.04 rad).
 constexpr Real kTiltSigmaAir_rad = Real(0.1);
+constexpr Real kStartHeightSigma_m = Real(1);     // first 3-D fix: 1-sigma of the start height prior between mirror solutions [m]
 constexpr Real kMaxLinearYawSigma_rad = Real(0.5); // largest yaw 1-sigma the IMU filter is started with
 constexpr Real kAccelEmaTau_s = Real(0.5);             // horizontal acceleration EMA time constant [s]
 constexpr Real kRestMaxForceChange_mps2 = Real(0.1);   // rest held: largest change of the mean specific force [m/s^2]
@@ -110,6 +111,7 @@ void Navigator::restart(bool counted_reset) {
   last_level_check_us_ = 0;
   recovery_level_ = 0;
   have_fix_ = false;
+  fix_wait_from_us_ = 0;
   for (auto& s : slots_) s = BiasSlot{};
   for (auto& a : anchor_slot_) a = -1;
   for (auto& t : tag_bias_t_us_) t = 0;
@@ -415,7 +417,7 @@ Real Navigator::track_speed_bound(uint64_t t_us) const {
   return std::fmax(speed - Real(3) * speed_sigma, Real(0));
 }
 
-bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix) {
+bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix, size_t min_dof, bool accept_rejected) {
   // The latest range of each anchor, youngest first (n <= kMaxAnchors).
   LsRange ranges[kMaxAnchors];
   uint64_t age_us[kMaxAnchors];
@@ -435,7 +437,7 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix) {
   }
   // Window: the span of the newest ranges a fix needs, with some margin (sparse
   // ranging takes seconds to hear enough anchors; dense ranging a few ms).
-  const size_t needed = planar_ ? 3 : 4;
+  const size_t needed = (planar_ ? 2 : 3) + min_dof;
   if (n < 3) return false;
   const uint64_t span_us = age_us[(n < needed ? n : needed) - 1];
   // Ages are below kMaxWindowUs (10 s): through uint32_t, no soft-double conversion on the M4F.
@@ -454,6 +456,9 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix) {
     ranges[m].sigma_m = static_cast<float>(std::sqrt(sigma * sigma + smear * smear + anchor_bias_prior_var()));
     ++m;
   }
+  // Waiting for redundancy: no solve before the window holds enough ranges
+  // (the exclusion in robust_ls_fix may then leave one of them out).
+  if (min_dof > 1 && m < needed) return false;
   const Vec3 lev = lever(tag_index);
   const Vec3 lever_level = quat_to_dcm(q_init_) * lev;  // yaw does not change the vertical part
   LsOptions opt;
@@ -468,20 +473,82 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix) {
     opt.two_d = true;
     st = robust_ls_fix(ranges, m, opt, ls);
   }
-  if (st != Status::kOk) return false;
+  // A first fix that waited its time may be one its own ranges reject (an NLOS
+  // range among just enough anchors): taken with the uncertainty its residuals
+  // show (the variance factor below), the best estimate there is.
+  // (dof >= 2: one degree of freedom gives a variance factor from a single draw.)
+  const bool take_rejected = accept_rejected && st == Status::kRejected && ls.converged && ls.dof >= 2;
+  if (st != Status::kOk && !take_rejected) return false;
+  Real factor_ssr = static_cast<Real>(ls.weighted_ssr);  // the variance factor's numerator and dof
+  Real factor_dof = static_cast<Real>(ls.dof);
+  // The first consistent 3-D fix, under the start height prior z0 = the tag at
+  // ekf.origin_height (1-sigma kStartHeightSigma_m): of the modes below, the one
+  // with the smallest wssr + ((z - z0) / sigma_z0)^2 is kept (the largest
+  // posterior). Anchors at about one height leave a mirror solution on their
+  // other side (a multicopter on the floor below anchors at 1.4-2.8 m fixes as
+  // well 3.5 m up), and which one Gauss-Newton finds depends on the linear start.
+  if (st == Status::kOk && !opt.two_d && !have_fix_) {
+    Real z_anchors_m = Real(0);
+    for (size_t i = 0; i < m; ++i) z_anchors_m += static_cast<Real>(ranges[i].anchor_pos_nav_m.z);
+    z_anchors_m /= static_cast<Real>(m);
+    LsOptions mirror_opt = opt;
+    mirror_opt.has_initial_guess = true;
+    mirror_opt.initial_guess_nav_m = ls.pos_nav_m;
+    mirror_opt.initial_guess_nav_m.z = static_cast<float>(Real(2) * z_anchors_m - static_cast<Real>(ls.pos_nav_m.z));
+    const Real z0_m = static_cast<Real>(opt.known_z_m);
+    auto cost = [z0_m](const LsFix& f) {
+      const Real dz = (static_cast<Real>(f.pos_nav_m.z) - z0_m) / kStartHeightSigma_m;
+      return static_cast<Real>(f.weighted_ssr) + dz * dz;
+    };
+    LsFix mirror;
+    // Compared only at equal redundancy: wssr falls with every range left out.
+    if (robust_ls_fix(ranges, m, mirror_opt, mirror) == Status::kOk && mirror.converged && mirror.dof == ls.dof) {
+      if (cost(mirror) < cost(ls)) {
+        ls = mirror;
+        ++diag_.start_height_switches;
+      }
+    }
+    // The third mode is the prior's own: the tag at z0 (a 2-D fix). NLOS
+    // excess on anchors around and below the tag is absorbed by a 3-D fix
+    // moving up (tuning drive air_indoor:24: 3 of 6 anchors NLOS, 6.2 m up at
+    // a claimed sigma_z of 0.27 m, with a consistent wssr). Its wssr carries
+    // the one degree of freedom more that the prior term adds to the others.
+    // It competes even where its ranges reject it (the variance factor below
+    // then sizes it): the NLOS excess that lifted the 3-D fix shows there.
+    LsOptions floor_opt = opt;
+    floor_opt.two_d = true;
+    LsFix on_floor;
+    const Status floor_st = robust_ls_fix(ranges, m, floor_opt, on_floor);
+    if ((floor_st == Status::kOk || floor_st == Status::kRejected) && on_floor.converged &&
+        on_floor.dof == ls.dof + 1 && static_cast<Real>(on_floor.weighted_ssr) < cost(ls)) {
+      ls = on_floor;
+      opt.two_d = true;
+      ++diag_.start_height_switches;
+    }
+    factor_ssr = static_cast<Real>(ls.weighted_ssr);
+    factor_dof = static_cast<Real>(ls.dof);
+    if (!opt.two_d) {
+      // A 3-D start far from the start height is as suspect as large residuals:
+      // the prior joins the consistency test (one degree of freedom more) and
+      // the variance factor. While the fix waits for redundancy (min_dof > 1),
+      // such a fix is refused and the next ranges are awaited.
+      factor_ssr = cost(ls);
+      factor_dof += Real(1);
+      if (min_dof > 1 && factor_ssr > Real(10) + Real(6) * factor_dof) return false;
+    }
+  }
   fix.t_us = t_us;
   fix.tag_pos_nav_m = to_vec3(ls.pos_nav_m);
   // A posteriori variance factor of the adjustment: residuals larger than the
   // ranges' sigmas explain (an NLOS range the test let through, a wrong local
   // solution) scale the fix's covariance up, never down.
-  const Real var_factor = ls.dof > 0 ? std::fmax(Real(1), static_cast<Real>(ls.weighted_ssr) / static_cast<Real>(ls.dof))
-                                     : Real(1);
+  const Real var_factor = factor_dof > Real(0) ? std::fmax(Real(1), factor_ssr / factor_dof) : Real(1);
   fix.sigma_h_m = std::sqrt(var_factor * static_cast<Real>(ls.cov_nav_m2[0][0] + ls.cov_nav_m2[1][1]));
   fix.sigma_v_m = opt.two_d ? Real(-1) : std::sqrt(var_factor * static_cast<Real>(ls.cov_nav_m2[2][2]));
   fix.yaw_rel_rad = quat_yaw(q_init_);
   fix.tag_index = tag_index;
   fix.age_s = oldest_s;
-  return std::isfinite(fix.sigma_h_m);
+  return std::isfinite(fix.sigma_h_m) && std::isfinite(fix.sigma_v_m);
 }
 
 Status Navigator::robust_ls_fix(LsRange* ranges, size_t n, const LsOptions& opt, LsFix& ls) const {
@@ -520,14 +587,30 @@ Status Navigator::robust_ls_fix(LsRange* ranges, size_t n, const LsOptions& opt,
 
 bool Navigator::init_track(int anchor_index, int tag_index, const UwbRange& range) {
   const uint64_t t = range.t_us;
-  if (first_range_t_us_ == 0) first_range_t_us_ = t;
+  if (fix_wait_from_us_ == 0) fix_wait_from_us_ = t;
   // The track is kept at ~10 Hz: a fix per range would cost an LS solve per
   // range while aligning (the worst 10 ms cycle on the M4F).
   uint64_t& last_try = last_fix_try_us_[tag_index];
   if (have_fix_ && last_try != 0 && t >= last_try && t - last_try < kTrackSpacingUs) return false;
   last_try = t;
+  // The first fix after a (re)start waits up to ekf.init_redundancy_wait for
+  // the redundancy the site's anchors allow: two ranges more than the unknowns
+  // detect an NLOS range, three let the test leave it out (seed 001
+  // exclusion), where one only bends the fix. Once that wait is over, a fix its
+  // ranges reject is taken at the size its residuals give it. A wait of 0
+  // turns both off: the first consistent fix.
+  size_t min_dof = 1;
+  bool accept_rejected = false;
+  if (!have_fix_ && cfg_.init_redundancy_wait_us > 0) {
+    const bool waiting = t < fix_wait_from_us_ || t - fix_wait_from_us_ < cfg_.init_redundancy_wait_us;
+    const size_t unknowns = planar_ ? 2U : 3U;
+    if (waiting && site_.num_anchors >= unknowns + 2U) {
+      min_dof = site_.num_anchors >= unknowns + 3U ? 3U : 2U;
+    }
+    accept_rejected = !waiting;
+  }
   TrackFix fix;
-  if (!try_ls_fix(t, tag_index, fix)) return false;
+  if (!try_ls_fix(t, tag_index, fix, min_dof, accept_rejected)) return false;
   (void)anchor_index;
   have_fix_ = true;
   // Thin the track to ~10 Hz so the ring spans the first metres even when slow.

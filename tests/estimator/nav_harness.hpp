@@ -32,6 +32,14 @@ struct RunScore {
   NavDiagnostics diag;
 };
 
+// Defaults with the first fix's redundancy wait off (ekf.init_redundancy_wait 0):
+// the first consistent fix, the start that drive-specific bounds were set on.
+inline Params first_consistent_fix_params() {
+  Params p;
+  (void)p.set(ParamId::kEkfInitRedundancyWait, 0.0F);  // 0 lies inside [min, max]: cannot fail
+  return p;
+}
+
 // Truth position at t_us by linear interpolation; false outside the truth span.
 inline bool truth_at(const dataset::Recording& rec, uint64_t t_us, double pos[3]) {
   const auto& tr = rec.truth;

@@ -9,7 +9,8 @@
 namespace uwbnav_f64_bridge {
 
 std::vector<Output> replay_double(const void* site, size_t site_bytes, const void* imu, size_t n_imu, size_t imu_bytes,
-                                  const void* uwb, size_t n_uwb, size_t uwb_bytes) {
+                                  const void* uwb, size_t n_uwb, size_t uwb_bytes, const int* param_ids,
+                                  const float* param_values, size_t n_params) {
   static_assert(sizeof(uwbnav::Real) == sizeof(double), "this file must be built with UWBNAV_ESTIMATOR_DOUBLE");
   std::vector<Output> out;
   if (site_bytes != sizeof(uwbnav::SiteConfig) || imu_bytes != sizeof(uwbnav::ImuSample) ||
@@ -24,7 +25,11 @@ std::vector<Output> replay_double(const void* site, size_t site_bytes, const voi
   for (size_t i = 0; i < n_uwb; ++i) {
     std::memcpy(static_cast<void*>(&rec.uwb[i].range), static_cast<const char*>(uwb) + i * uwb_bytes, uwb_bytes);
   }
-  const uwbnav::test::RunScore s = uwbnav::test::replay(rec, uwbnav::Params{});
+  uwbnav::Params params;
+  for (size_t i = 0; i < n_params; ++i) {
+    if (params.set(static_cast<uwbnav::ParamId>(param_ids[i]), param_values[i]) != uwbnav::Status::kOk) return out;
+  }
+  const uwbnav::test::RunScore s = uwbnav::test::replay(rec, params);
   for (const auto& o : s.outputs) {
     Output r;
     r.t_us = o.out.t_us;
