@@ -158,6 +158,7 @@ Status Navigator::configure(const SiteConfig& site, const Params& params) {
   r_sh_count_ = Real(0);
   diag_.uwb_sigma_m = static_cast<float>(cfg_.uwb_sigma_m);
   configured_ = true;
+  started_ = false;
   restart(false);
   after_failure_ = false;
   return gs;

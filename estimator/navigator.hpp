@@ -177,7 +177,7 @@ class Navigator {
     Real cv_turn_psd = Real(1);     // [rad/s^2/sqrt(Hz)] turn-rate walk without IMU
     Real level_sigma = Real(0.03);  // [rad] ground vehicle without IMU: tilt about level
     uint64_t init_window_us = 300000;
-    uint64_t init_redundancy_wait_us = 1000000;  // first fix: wait this long for two redundant ranges
+    uint64_t init_redundancy_wait_us = 1000000;  // first fix: wait this long for up to three redundant ranges
     Real init_heading_dist = Real(3);
     uint64_t init_heading_timeout_us = 30000000;
     Real planar_spread = Real(1);
@@ -435,6 +435,7 @@ class Navigator {
   uint64_t last_fix_try_us_[kMaxTags] = {};  // last LS fix attempt per tag (track at ~10 Hz)
   uint64_t heading_wait_since_us_ = 0;
   bool have_fix_ = false;
+  bool started_ = false;  // a first fix was made since configure(): the start height prior is spent
   YawGsf gsf_;                    // yaw hypotheses while no heading source has answered
   uint64_t gsf_last_update_us_ = 0;  // last range that updated the yaw bank
 

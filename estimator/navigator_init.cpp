@@ -481,13 +481,15 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix, size_t m
   if (st != Status::kOk && !take_rejected) return false;
   Real factor_ssr = static_cast<Real>(ls.weighted_ssr);  // the variance factor's numerator and dof
   Real factor_dof = static_cast<Real>(ls.dof);
-  // The first consistent 3-D fix, under the start height prior z0 = the tag at
+  // The navigator's first consistent 3-D fix (not after a restart: the vehicle
+  // may be anywhere by then), under the start height prior z0 = the tag at
   // ekf.origin_height (1-sigma kStartHeightSigma_m): of the modes below, the one
   // with the smallest wssr + ((z - z0) / sigma_z0)^2 is kept (the largest
   // posterior). Anchors at about one height leave a mirror solution on their
   // other side (a multicopter on the floor below anchors at 1.4-2.8 m fixes as
   // well 3.5 m up), and which one Gauss-Newton finds depends on the linear start.
-  if (st == Status::kOk && !opt.two_d && !have_fix_) {
+  bool height_switched = false;
+  if (st == Status::kOk && !opt.two_d && !have_fix_ && !started_) {
     Real z_anchors_m = Real(0);
     for (size_t i = 0; i < m; ++i) z_anchors_m += static_cast<Real>(ranges[i].anchor_pos_nav_m.z);
     z_anchors_m /= static_cast<Real>(m);
@@ -505,7 +507,7 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix, size_t m
     if (robust_ls_fix(ranges, m, mirror_opt, mirror) == Status::kOk && mirror.converged && mirror.dof == ls.dof) {
       if (cost(mirror) < cost(ls)) {
         ls = mirror;
-        ++diag_.start_height_switches;
+        height_switched = true;
       }
     }
     // The third mode is the prior's own: the tag at z0 (a 2-D fix). NLOS
@@ -523,7 +525,7 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix, size_t m
         on_floor.dof == ls.dof + 1 && static_cast<Real>(on_floor.weighted_ssr) < cost(ls)) {
       ls = on_floor;
       opt.two_d = true;
-      ++diag_.start_height_switches;
+      height_switched = true;
     }
     factor_ssr = static_cast<Real>(ls.weighted_ssr);
     factor_dof = static_cast<Real>(ls.dof);
@@ -548,7 +550,9 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix, size_t m
   fix.yaw_rel_rad = quat_yaw(q_init_);
   fix.tag_index = tag_index;
   fix.age_s = oldest_s;
-  return std::isfinite(fix.sigma_h_m) && std::isfinite(fix.sigma_v_m);
+  if (!std::isfinite(fix.sigma_h_m) || !std::isfinite(fix.sigma_v_m)) return false;
+  if (height_switched) ++diag_.start_height_switches;
+  return true;
 }
 
 Status Navigator::robust_ls_fix(LsRange* ranges, size_t n, const LsOptions& opt, LsFix& ls) const {
@@ -613,6 +617,7 @@ bool Navigator::init_track(int anchor_index, int tag_index, const UwbRange& rang
   if (!try_ls_fix(t, tag_index, fix, min_dof, accept_rejected)) return false;
   (void)anchor_index;
   have_fix_ = true;
+  started_ = true;
   // Thin the track to ~10 Hz so the ring spans the first metres even when slow.
   const TrackFix& prev = track_[(track_head_ + kTrackCapacity - 1) % kTrackCapacity];
   if (track_count_ == 0 || fix.t_us - prev.t_us >= kTrackSpacingUs || prev.tag_index != fix.tag_index) {
