@@ -54,10 +54,13 @@ constexpr Real kRestMaxGyroChange_radps = Real(0.005); // rest held: largest cha
 constexpr Real kCvStartVelSigma_mps = Real(2);     // ranges-only start: horizontal velocity 1-sigma [m/s]
 constexpr Real kCvStartVelSigmaV_mps = Real(0.5);  // ... vertical [m/s]
 
-// Chi-square acceptance of an LS fix with dof degrees of freedom (~99.9 % for small dof).
+// Chi-square bound of a weighted SSR with dof degrees of freedom (~99.9 % for small dof).
+Real wssr_bound(Real dof) { return Real(10) + Real(6) * dof; }
+
+// Chi-square acceptance of an LS fix with dof degrees of freedom.
 bool ls_consistent(const LsFix& ls) {
   if (ls.dof == 0) return static_cast<Real>(ls.gdop) <= Real(10);
-  return static_cast<Real>(ls.weighted_ssr) <= Real(10) + Real(6) * static_cast<Real>(ls.dof);
+  return static_cast<Real>(ls.weighted_ssr) <= wssr_bound(static_cast<Real>(ls.dof));
 }
 
 }  // namespace
@@ -536,7 +539,7 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix, size_t m
       // such a fix is refused and the next ranges are awaited.
       factor_ssr = cost(ls);
       factor_dof += Real(1);
-      if (min_dof > 1 && factor_ssr > Real(10) + Real(6) * factor_dof) return false;
+      if (min_dof > 1 && factor_ssr > wssr_bound(factor_dof)) return false;
     }
   }
   fix.t_us = t_us;
