@@ -41,6 +41,7 @@ struct RangeContext {
   bool innovation_is_evidence = true;  // false: the filter learns no range error, so each of a pair's
                                        // innovations carries the same unlearned offset: a long one is
                                        // no NLOS evidence (default policy)
+  bool inertial = false;  // the prediction comes from the IMU filter, which can coast through NLOS
 };
 
 // The gating layer's verdict on one range.

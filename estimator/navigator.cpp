@@ -767,7 +767,8 @@ RangeReport Navigator::on_range(const UwbRange& range) {
   AnchorStatus& as = anchor_status_[ai];
   as.last_t_us = range.t_us;
   as.last_range_m = range.range_m;
-  pair_[ai][ti] = PairRange{range.t_us, range.range_m, true};
+  const bool jumped = range_jumped(pair_[ai][ti], range.t_us, range.range_m);
+  pair_[ai][ti] = PairRange{range.t_us, range.range_m, true, jumped};
   range_rate_on_range(ai, ti, range.t_us, range.range_m);
 
   if (phase_ != Phase::kRunning) {
@@ -837,6 +838,7 @@ RangeReport Navigator::on_range(const UwbRange& range) {
     // and keeps the full evidence: clipped there as well, tuning seeds 1-60
     // gave 44 drives better and 39 worse (air_indoor worst 0.271 -> 0.343 m).
     ctx.innovation_is_evidence = !without_imu;
+    ctx.inertial = !cv_mode_;
   }
 
   const GatingDecision d = gating_.assess(ctx);
@@ -1103,6 +1105,7 @@ void Navigator::integrity_check(uint64_t t_us, int tag_index) {
 }
 
 void Navigator::cover_gap(uint64_t t_us, Real gap_m2) {
+  gating_.on_filter_unverified();
   // The filter's claim does not cover its distance to what the ranges say:
   // enlarge the claim to cover it (the gate then lets the ranges that would
   // correct the filter back in). Repeated failures escalate through recover().
@@ -1174,6 +1177,7 @@ void Navigator::recover(uint64_t t_us, uint8_t min_level) {
   if (level < min_level) level = min_level;
   last_recovery_us_ = t_us;
   recovery_level_ = level > 3 ? uint8_t(3) : level;
+  gating_.on_filter_unverified();
 #if UWBNAV_RBF_BRIDGE
   // The filter was inconsistent (and may jump now): windows in flight measure nothing.
   bridge_.restart_shadows();

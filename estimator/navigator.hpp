@@ -218,6 +218,11 @@ class Navigator {
     uint64_t t_us = 0;
     float range_m = 0.0F;
     bool valid = false;
+    // The range's change from the pair's previous range exceeds what noise
+    // and the start's motion bound allow (Navigator::range_jumped; before
+    // the navigator's first fix only): the pair waits out of the first fix
+    // while the redundancy wait lasts.
+    bool jumped = false;
   };
   // One LS fix of the initialisation track.
   struct TrackFix {
@@ -259,6 +264,9 @@ class Navigator {
   void try_heading(uint64_t t_us);
   Real speed_lower_bound(uint64_t t_us) const;
   Real track_speed_bound(uint64_t t_us) const;
+  // Seed 000 eq. 3-6 before the first fix: |Δρ| of a pair's consecutive
+  // ranges beyond kRangeJumpSigma noise sigmas and ekf.init_speed · Δt.
+  [[nodiscard]] bool range_jumped(const PairRange& prev, uint64_t t_us, float range_m) const;
   void range_rate_on_range(int anchor_index, int tag_index, uint64_t t_us, float range_m);
   Real range_rate_bound(const RangeRateBlock& b) const;
   Real range_rate_speed_bound(uint64_t t_us) const;

@@ -21,6 +21,10 @@ namespace {
 constexpr uint64_t kGeometryWindowUs = 1000000;
 constexpr int kMinLosAnchors = 2;
 constexpr float kMomentUncertainty = 4.0F;
+// Ranges a (re)started filter must have passed inside resid_th before its
+// prediction outweighs long ranges in the escape (decide_default): as many as
+// the share of agreeing ranges averages over (1 / its gain 0.02).
+constexpr uint32_t kVerifiedRanges = 50;
 
 GatingPolicy policy_from_param(float value) {
   const long v = std::lround(value);
@@ -122,6 +126,7 @@ void GatingLayer::on_filter_restart() {
   seen_ready_ = false;
   escape_active_ = false;
   los_share_ = 1.0F;
+  verified_ranges_ = 0;
 }
 
 GatingAnchorStats GatingLayer::anchor_stats(size_t anchor_index) const {
@@ -154,6 +159,19 @@ int GatingLayer::los_anchors_heard(const RangeContext& ctx, size_t self) const {
     ++n;
   }
   return n;
+}
+
+bool GatingLayer::short_anchor_heard(const RangeContext& ctx, size_t self) const {
+  const size_t tag_index = self % kMaxTags;
+  for (size_t a = 0; a < site_.num_anchors && a < kMaxAnchors; ++a) {
+    const size_t i = a * kMaxTags + tag_index;
+    const Slot& s = slots_[i];
+    if (i != self && s.has_last && s.last_short && s.last_t_us <= ctx.range.t_us &&
+        ctx.range.t_us - s.last_t_us <= kGeometryWindowUs) {
+      return true;
+    }
+  }
+  return false;
 }
 
 int GatingLayer::slot_index(const RangeContext& ctx) const {
@@ -454,18 +472,45 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
   const float z = std::isfinite(e.z) ? e.z
                   : ctx.innovation_var_m2 > 0.0F ? std::fabs(ctx.innovation_m) / sqrt_s
                                                  : kNaNf;
+  // NLOS only lengthens a range (docs/nlos.md item 6, "Long ranges of a ready
+  // filter"): to a ready filter a range longer than its prediction beyond
+  // resid_th is what an NLOS path looks like, and it is evidence that the
+  // filter left its ranges only when another anchor of the tag reads short
+  // (a filter that moved away from an anchor reads that anchor short; no
+  // NLOS path does). While no other anchor's latest range (within
+  // kGeometryWindowUs) read short by more than one sigma of S, such a range
+  // neither lowers the share nor starves the filter: where every anchor is
+  // NLOS at once the IMU filter coasts instead of being dragged by long
+  // ranges (measured: tuning drive ground_hard:15, six anchors NLOS while the
+  // car braked to a stop; robust mode fused 1-4 m long ranges, one of them
+  // moved the filter 0.5 m, 2.6 m off by the time it stood). Without the
+  // short-anchor condition a filter that drifted toward a line-of-sight
+  // anchor stayed locked out of it (tuning ground_nlos:31, 0.56 -> 1.02 m).
+  // Only the IMU filter coasts: the ranges-only filter (no inertial
+  // prediction; without an IMU its long innovations may be unlearned offsets)
+  // keeps both tests, as does a filter that is not ready (a pull-away under
+  // NLOS starves it with ranges of either sign) and a filter (re)started,
+  // handed over, recovered or in robust mode less than kVerifiedRanges
+  // confirmed ranges ago: its long ranges may be its own error (tuning
+  // ground_hard:65, an IMU filter handed a wrong velocity ran 10 m off
+  // without the escape).
+  const bool long_explained = ctx.inertial && ctx.filter_ready && verified_ranges_ >= kVerifiedRanges &&
+                              std::isfinite(ctx.innovation_m) && ctx.innovation_m > 0.0F &&
+                              !(z < resid_th_) && !short_anchor_heard(ctx, static_cast<size_t>(&slot - slots_));
   if (escape_us_ > 0 && std::isfinite(z)) {
     constexpr float kShareGain = 0.02F;  // EMA over about 50 ranges
-    los_share_ += kShareGain * ((z < resid_th_ ? 1.0F : 0.0F) - los_share_);
+    if (!long_explained) los_share_ += kShareGain * ((z < resid_th_ ? 1.0F : 0.0F) - los_share_);
     if (!seen_ready_) {
       seen_ready_ = true;
       last_pass_t_us_ = ctx.range.t_us;
     }
+    if (long_explained && !escape_active_) last_pass_t_us_ = ctx.range.t_us;
     const bool starved = ctx.range.t_us - last_pass_t_us_ > escape_us_;
     if (!escape_active_ && (starved || los_share_ < drift_frac_)) {
       escape_active_ = true;
       ++escape_entries_;
       los_share_ = 0.0F;
+      verified_ranges_ = 0;
     } else if (escape_active_ && los_share_ > verify_frac_) {
       escape_active_ = false;
     }
@@ -495,6 +540,7 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
       }
     } else if (!d.nlos) {
       last_pass_t_us_ = ctx.range.t_us;
+      if (ctx.filter_ready && z < resid_th_ && verified_ranges_ < kVerifiedRanges) ++verified_ranges_;
     }
   }
   return d;
@@ -535,6 +581,8 @@ GatingDecision GatingLayer::assess(const RangeContext& ctx) {
   slot.last_tag_pos_nav_m = ctx.tag_pos_nav_m;
   slot.last_filter_ready = ctx.filter_ready;
   slot.last_nlos = d.nlos;
+  slot.last_short = ctx.filter_ready && ctx.innovation_var_m2 > 0.0F &&
+                    ctx.innovation_m * ctx.innovation_m > ctx.innovation_var_m2 && ctx.innovation_m < 0.0F;
   if (d.nlos) {
     ++slot.stats.nlos_count;
   } else {

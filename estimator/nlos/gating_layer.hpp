@@ -46,6 +46,10 @@ class GatingLayer {
   // ranges-only to the IMU filter, re-anchoring): its predictions are
   // unverified again, so the robust warm-up starts over; per-pair state stays.
   void on_filter_restart();
+  // The filter was found inconsistent and recovered in place (covariance
+  // inflated, re-anchored): its predictions must be confirmed by ranges again
+  // before they outweigh long ranges (decide_default, kVerifiedRanges).
+  void on_filter_unverified() { verified_ranges_ = 0; }
 
   // Verdict on one range, before the filter update. Never touches the filter.
   // Ranges must come in non-decreasing time (as the Navigator guarantees).
@@ -54,8 +58,10 @@ class GatingLayer {
   void on_result(const RangeContext& ctx, const GatingDecision& d, bool fused);
 
   GatingPolicy policy() const { return policy_; }
-  // Robust mode of the default policy: after the filter first converges and after
-  // escape_s without any fused range (see decide_default, docs/nlos.md).
+  // Robust mode of the default policy: after escape_s without a passed range, or
+  // when the share of agreeing ranges falls below drift_frac; long ranges of a
+  // verified IMU filter while no anchor reads short count for neither (see
+  // decide_default, docs/nlos.md).
   bool escape_active() const { return escape_active_; }
   uint32_t escape_entries() const { return escape_entries_; }
   // Counters of anchor `anchor_index` (index into SiteConfig::anchors).
@@ -89,6 +95,9 @@ class GatingLayer {
     bool has_last = false;
     bool last_filter_ready = false;
     bool last_nlos = false;
+    // The latest range read shorter than a ready filter's prediction by more
+    // than one sigma of S: what a filter that moved away from this anchor reads.
+    bool last_short = false;
   };
 
   // Evidence of one range, computed once and shared by the policies.
@@ -105,6 +114,9 @@ class GatingLayer {
   // Other anchors of slot self's tag whose latest range, within
   // kGeometryWindowUs of this one, was classified line of sight.
   [[nodiscard]] int los_anchors_heard(const RangeContext& ctx, size_t self) const;
+  // Whether another anchor of slot self's tag read short (Slot::last_short)
+  // with its latest range within kGeometryWindowUs of this one.
+  [[nodiscard]] bool short_anchor_heard(const RangeContext& ctx, size_t self) const;
   float sigma_uwb_m(const RangeContext& ctx) const;
   Evidence compute_evidence(const RangeContext& ctx, const Slot& slot) const;
   float svm_p(const SvmModel* model, const Evidence& e, const RangeContext& ctx) const;
@@ -151,11 +163,12 @@ class GatingLayer {
   float drift_frac_ = 0.15F;
 
   // Escape state (default policy).
-  uint64_t last_pass_t_us_ = 0;    // last range that passed the gate while the filter was ready
+  uint64_t last_pass_t_us_ = 0;    // last range that passed the gate, or that a verified filter's NLOS explains
   bool seen_ready_ = false;         // the filter has been ready since the last reset
   bool escape_active_ = false;      // robust mode (warm-up or escape)
   uint32_t escape_entries_ = 0;
   float los_share_ = 0.0F;          // EMA of (|innovation| < resid_th sigma_uwb) while ready
+  uint32_t verified_ranges_ = 0;    // ranges a ready filter passed inside resid_th since it (re)started or recovered
 };
 
 }  // namespace uwbnav

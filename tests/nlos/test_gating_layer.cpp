@@ -283,6 +283,87 @@ TEST(GatingLayer, DefaultEscapeReadmitsDriftedFilter) {
   EXPECT_FALSE(g.escape_active());
 }
 
+// Feeds n ranges 20 ms apart, anchors in turn; anchor `short_anchor` (-1:
+// none) reads `short_m` (negative), the others `long_m`; predictions of the
+// IMU filter unless `inertial` is false. Returns how many were admitted.
+int feed_long_short(GatingLayer& g, uint64_t& t, int n, float long_m, int short_anchor, float short_m, bool ready,
+                    bool inertial = true) {
+  int used = 0;
+  for (int k = 0; k < n; ++k) {
+    const int a = k % 4;
+    const float innov = a == short_anchor ? short_m : long_m;
+    RangeContext c = ctx_at(a, t, 20.0F + innov, innov, ready);
+    c.inertial = inertial;
+    const GatingDecision d = g.assess(c);
+    g.on_result(c, d, d.use);
+    if (d.use) ++used;
+    t += 20000;
+  }
+  return used;
+}
+
+// A default-policy layer whose ready filter has had 200 consistent ranges
+// (verified, share of agreeing ranges at 1); t runs on from them.
+void start_verified(GatingLayer& g, uint64_t& t) {
+  ASSERT_TRUE(ok(g.configure(make_site(), params_with(GatingPolicy::kDefault))));
+  t = 0;
+  feed(g, t, 200, 0.02F);
+}
+
+TEST(GatingLayer, DefaultReadyFilterCoastsThroughLongRangesFromEveryAnchorButEscapesWhenOneReadsShort) {
+  // NLOS only lengthens a range. Every anchor 3 m long (20 sigma) for 1.2 s
+  // (more than escape_s = 0.5 s): what an NLOS episode on every anchor looks
+  // like to a converged IMU filter. It neither starves the filter nor lowers
+  // the share of agreeing ranges, so nothing long is fused and robust mode
+  // stays off (it used to fuse them and drag the filter; tuning ground_hard:15).
+  GatingLayer g;
+  uint64_t t = 0;
+  start_verified(g, t);
+  EXPECT_EQ(feed_long_short(g, t, 60, 3.0F, -1, 0.0F, true), 0);
+  EXPECT_FALSE(g.escape_active());
+  EXPECT_EQ(g.escape_entries(), 0U);
+
+  // The same long ranges while one anchor reads 0.5 m short (3.5 sigma): the
+  // filter moved away from that anchor, the long ranges may be its drift, and
+  // robust mode re-admits them as before (here through the starvation test:
+  // the episode chain soon holds the short anchor's ranges back too, so no
+  // range passes for escape_s).
+  GatingLayer h;
+  start_verified(h, t);
+  EXPECT_GT(feed_long_short(h, t, 60, 3.0F, 3, -0.5F, true), 10);
+  EXPECT_TRUE(h.escape_active());
+  EXPECT_EQ(h.escape_entries(), 1U);
+
+  // A filter that is not ready keeps the starvation test whatever the sign
+  // (a pull-away under NLOS starves it with long ranges).
+  GatingLayer u;
+  start_verified(u, t);
+  EXPECT_GT(feed_long_short(u, t, 60, 3.0F, -1, 0.0F, false), 10);
+  EXPECT_EQ(u.escape_entries(), 1U);
+
+  // Nor does a filter just handed over (on_filter_restart) whose predictions
+  // fewer than 50 ranges have confirmed: its long ranges may be its own error
+  // (tuning ground_hard:65, an IMU filter handed a wrong velocity, 10 m off).
+  GatingLayer v;
+  start_verified(v, t);
+  v.on_filter_restart();
+  feed(v, t, 20, 0.02F);
+  EXPECT_GT(feed_long_short(v, t, 60, 3.0F, -1, 0.0F, true), 10);
+  EXPECT_EQ(v.escape_entries(), 1U);
+
+  // Nor a filter recovered in place (inflated, re-anchored) since, nor the
+  // ranges-only filter, which has no inertial prediction to coast on.
+  GatingLayer w;
+  start_verified(w, t);
+  w.on_filter_unverified();
+  EXPECT_GT(feed_long_short(w, t, 60, 3.0F, -1, 0.0F, true), 10);
+  EXPECT_EQ(w.escape_entries(), 1U);
+  GatingLayer c;
+  start_verified(c, t);
+  EXPECT_GT(feed_long_short(c, t, 60, 3.0F, -1, 0.0F, true, false), 10);
+  EXPECT_EQ(c.escape_entries(), 1U);
+}
+
 TEST(GatingLayer, RobustModeWeighsARangeByItsPairsChannelEpisodeNotByItsOwnGapAlone) {
   // Robust mode ignores the filter-derived evidence but not the channel: a
   // range whose own fp/rx power gap reads line-of-sight-like, from a pair the
