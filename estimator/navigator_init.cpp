@@ -308,8 +308,8 @@ Real Navigator::speed_lower_bound(uint64_t t_us) const {
 bool Navigator::range_jumped(const PairRange& prev, uint64_t t_us, float range_m) const {
   // A gross outlier (short as well as long) or the onset of an NLOS episode
   // in the latest range of a pair bends the first fix, and the filter
-  // started from it then rejects that anchor's good ranges as NLOS (tuning
-  // drive ground_nlos:62: a range 3.6 m short among the first fix's four put
+  // started from it then rejects that anchor's good ranges as NLOS (drive
+  // ground_nlos:62, tuning seeds 61-99: a range 3.6 m short among the first fix's four put
   // the start 4.3 m off at a claimed 0.8 m, 14 s before it came back). Seed
   // 000's consistency model (eq. 3-6) before the navigator's first fix: the
   // change of a pair's range beyond the travel the fix itself allows for
@@ -318,16 +318,17 @@ bool Navigator::range_jumped(const PairRange& prev, uint64_t t_us, float range_m
   // while the redundancy wait lasts the first fix leaves the pair out until
   // its next range agrees with the latest (try_ls_fix); an outlier keeps its
   // pair out for two ranges. Once the wait is over every pair counts again:
-  // a vehicle moving faster than ekf.init_speed from the start has every pair
-  // jump, and its first fix comes at the end of the wait. Tried and not
+  // a vehicle moving fast from the start has its pairs with the largest range
+  // rates jump, and where too few pairs remain its first fix comes at the end
+  // of the wait. Tried and not
   // kept: weighing such a range down by the jump instead (tuning seeds 1-60:
   // 5 drives better, 10 worse; ground_nlos:62 started 1.6 m off at a claimed
   // 1.1 m). Pairs with a single range, or ranges more than kMaxWindowUs
   // apart, pass.
   if (started_ || !prev.valid || t_us <= prev.t_us || t_us - prev.t_us > kMaxWindowUs) return false;
   const Real dt_s = static_cast<Real>(static_cast<uint32_t>(t_us - prev.t_us)) * Real(1e-6);
-  const Real bound = kRangeJumpSigma * std::sqrt(Real(2) * r_los_m2_) + cfg_.init_speed * dt_s;
-  return std::fabs(static_cast<Real>(range_m) - static_cast<Real>(prev.range_m)) > bound;
+  const Real bound_m = kRangeJumpSigma * std::sqrt(Real(2) * r_los_m2_) + cfg_.init_speed * dt_s;
+  return std::fabs(static_cast<Real>(range_m) - static_cast<Real>(prev.range_m)) > bound_m;
 }
 
 void Navigator::range_rate_on_range(int anchor_index, int tag_index, uint64_t t_us, float range_m) {

@@ -491,8 +491,8 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
   // keeps both tests, as does a filter that is not ready (a pull-away under
   // NLOS starves it with ranges of either sign) and a filter (re)started,
   // handed over, recovered or in robust mode less than kVerifiedRanges
-  // confirmed ranges ago: its long ranges may be its own error (tuning
-  // ground_hard:65, an IMU filter handed a wrong velocity ran 10 m off
+  // confirmed ranges ago: its long ranges may be its own error (ground_hard:65,
+  // tuning seeds 61-99: an IMU filter handed a wrong velocity ran 10 m off
   // without the escape).
   const bool long_explained = ctx.inertial && ctx.filter_ready && verified_ranges_ >= kVerifiedRanges &&
                               std::isfinite(ctx.innovation_m) && ctx.innovation_m > 0.0F &&

@@ -168,7 +168,8 @@ class GatingLayer {
   bool escape_active_ = false;      // robust mode (warm-up or escape)
   uint32_t escape_entries_ = 0;
   float los_share_ = 0.0F;          // EMA of (|innovation| < resid_th sigma_uwb) while ready
-  uint32_t verified_ranges_ = 0;    // ranges a ready filter passed inside resid_th since it (re)started or recovered
+  uint32_t verified_ranges_ = 0;    // ranges a ready filter passed inside resid_th since it (re)started,
+                                    // recovered or entered robust mode
 };
 
 }  // namespace uwbnav

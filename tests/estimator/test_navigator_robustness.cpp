@@ -66,7 +66,7 @@ UwbRange planar_range(uint64_t t_us, size_t a, const float* ax, const float* ay,
 
 // A gross outlier in the latest range of a pair whose anchor alone fixes one
 // direction cannot be told from the truth by the first fix's own test (low
-// redundancy): tuning drive ground_nlos:62, a road with its four anchors in a
+// redundancy): drive ground_nlos:62 (tuning seeds 61-99), a road with its four anchors in a
 // zig-zag, started 4.3 m off at a claimed 0.8 m from one range 3.6 m short.
 TEST(NavigatorRobustness, FirstFixLeavesOutAPairWhoseLatestRangeJumpedByMoreThanNoiseAndMotionAllow) {
   // GIVEN a car at rest near the first of four road anchors (nlos_62's layout),
@@ -83,29 +83,30 @@ TEST(NavigatorRobustness, FirstFixLeavesOutAPairWhoseLatestRangeJumpedByMoreThan
   std::mt19937 gen(62);
   std::normal_distribution<float> noise(0.0F, 0.1F);
   const size_t order[5] = {0, 1, 2, 0, 3};  // then round robin
-  double first_err = -1;
-  double first_sigma = -1;
-  for (uint64_t k = 0; k < 200 && first_err < 0; ++k) {
+  double first_err_m = -1;
+  double first_sigma_m = -1;
+  for (uint64_t k = 0; k < 200 && first_err_m < 0; ++k) {
     const uint64_t t = 20000 + k * 22000;
     const size_t a = k < 5 ? order[k] : k % 4;
     (void)nav.on_range(planar_range(t, a, ax, ay, truth[0], truth[1], noise(gen) + (k == 3 ? -3.6F : 0.0F)));
     const NavOutput o = nav.output(t);
     if (std::isfinite(o.pos_nav_m.x)) {
-      first_err = std::hypot(static_cast<double>(o.pos_nav_m.x) - truth[0], static_cast<double>(o.pos_nav_m.y) - truth[1]);
-      first_sigma = std::hypot(static_cast<double>(o.pos_sigma_m.x), static_cast<double>(o.pos_sigma_m.y));
+      first_err_m = std::hypot(static_cast<double>(o.pos_nav_m.x) - truth[0], static_cast<double>(o.pos_nav_m.y) - truth[1]);
+      first_sigma_m = std::hypot(static_cast<double>(o.pos_sigma_m.x), static_cast<double>(o.pos_sigma_m.y));
     }
   }
-  std::printf("first fix after a 3.6 m short range: error %.3f m, claimed sigma_h %.3f m\n", first_err, first_sigma);
+  std::printf("first fix after a 3.6 m short range: error %.3f m, claimed sigma_h %.3f m\n", first_err_m, first_sigma_m);
   // THEN the first fix waits for that pair to agree again and starts near the truth, inside its claim
-  ASSERT_GE(first_err, 0.0);
-  EXPECT_LT(first_err, 1.0);
-  EXPECT_LT(first_err, 2.0 * first_sigma);
+  ASSERT_GE(first_err_m, 0.0);
+  EXPECT_LT(first_err_m, 1.0);
+  EXPECT_LT(first_err_m, 2.0 * first_sigma_m);
 }
 
 TEST(NavigatorRobustness, FirstFixOfAVehicleAlreadyMovingFastComesAtTheEndOfTheRedundancyWait) {
-  // GIVEN a car that is at 12 m/s from its first range on (every pair's range
-  // changes faster than ekf.init_speed allows for, so every pair "jumps"),
-  // its first range 2 m long (NLOS), so the first round of ranges gives no fix
+  // GIVEN a car that is at 12 m/s from its first range on: the two anchors
+  // behind it see their ranges change faster than ekf.init_speed and noise
+  // allow for, so those pairs "jump"; its first range 2 m long (NLOS), so the
+  // first round of ranges gives no fix
   SiteConfig site;
   const float ax[4] = {0.0F, 100.0F, 100.0F, 0.0F};
   const float ay[4] = {0.0F, 0.0F, 40.0F, 40.0F};
@@ -122,9 +123,10 @@ TEST(NavigatorRobustness, FirstFixOfAVehicleAlreadyMovingFastComesAtTheEndOfTheR
     if (std::isfinite(nav.output(t).pos_nav_m.x)) first_t_s = static_cast<double>(t) * 1e-6;
   }
   std::printf("first fix of a car at 12 m/s: %.2f s\n", first_t_s);
-  // WHEN its pairs are left out of the first fix while they jump
-  // THEN only for the redundancy wait (1 s): the fix still comes
-  EXPECT_GT(first_t_s, 0.0);
+  // WHEN its jumping pairs are left out of the first fix
+  // THEN only for the redundancy wait (1 s): the fix comes at its end (the
+  // delay is the rule's cost here: 0.11 s without it)
+  EXPECT_GT(first_t_s, 0.9);
   EXPECT_LT(first_t_s, 1.2);
 }
 
