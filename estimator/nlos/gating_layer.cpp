@@ -149,29 +149,17 @@ GatingAnchorStats GatingLayer::anchor_stats(size_t anchor_index) const {
   return sum;
 }
 
-int GatingLayer::los_anchors_heard(const RangeContext& ctx, size_t self) const {
+int GatingLayer::anchors_heard(const RangeContext& ctx, size_t self, bool Slot::*flag, bool value) const {
+  // A slot time-stamped after this range (out of order) wraps past the window.
   const size_t tag_index = self % kMaxTags;
   int n = 0;
   for (size_t a = 0; a < site_.num_anchors && a < kMaxAnchors; ++a) {
     const size_t i = a * kMaxTags + tag_index;
     const Slot& s = slots_[i];
-    if (i == self || !s.has_last || s.last_nlos || ctx.range.t_us - s.last_t_us > kGeometryWindowUs) continue;
+    if (i == self || !s.has_last || s.*flag != value || ctx.range.t_us - s.last_t_us > kGeometryWindowUs) continue;
     ++n;
   }
   return n;
-}
-
-bool GatingLayer::short_anchor_heard(const RangeContext& ctx, size_t self) const {
-  const size_t tag_index = self % kMaxTags;
-  for (size_t a = 0; a < site_.num_anchors && a < kMaxAnchors; ++a) {
-    const size_t i = a * kMaxTags + tag_index;
-    const Slot& s = slots_[i];
-    if (i != self && s.has_last && s.last_short && s.last_t_us <= ctx.range.t_us &&
-        ctx.range.t_us - s.last_t_us <= kGeometryWindowUs) {
-      return true;
-    }
-  }
-  return false;
 }
 
 int GatingLayer::slot_index(const RangeContext& ctx) const {
@@ -443,7 +431,7 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
   const bool very_uncertain =
       ctx.innovation_var_m2 - ctx.meas_var_m2 > kMomentUncertainty * nlos_bias_m_ * nlos_bias_m_;
   const bool moment = d.nlos && !gross && long_in_gate && very_uncertain &&
-                      los_anchors_heard(ctx, static_cast<size_t>(&slot - slots_)) < kMinLosAnchors;
+                      anchors_heard(ctx, static_cast<size_t>(&slot - slots_), &Slot::last_nlos, false) < kMinLosAnchors;
   d.bound = d.nlos && !gross && short_in_gate && uncertain;
   d.use = !d.nlos || d.bound || moment;
   if (d.bound || moment) {
@@ -496,7 +484,8 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
   // without the escape).
   const bool long_explained = ctx.inertial && ctx.filter_ready && verified_ranges_ >= kVerifiedRanges &&
                               std::isfinite(ctx.innovation_m) && ctx.innovation_m > 0.0F &&
-                              !(z < resid_th_) && !short_anchor_heard(ctx, static_cast<size_t>(&slot - slots_));
+                              !(z < resid_th_) &&
+                              anchors_heard(ctx, static_cast<size_t>(&slot - slots_), &Slot::last_short, true) == 0;
   if (escape_us_ > 0 && std::isfinite(z)) {
     constexpr float kShareGain = 0.02F;  // EMA over about 50 ranges
     if (!long_explained) los_share_ += kShareGain * ((z < resid_th_ ? 1.0F : 0.0F) - los_share_);

@@ -112,11 +112,9 @@ class GatingLayer {
 
   int slot_index(const RangeContext& ctx) const;
   // Other anchors of slot self's tag whose latest range, within
-  // kGeometryWindowUs of this one, was classified line of sight.
-  [[nodiscard]] int los_anchors_heard(const RangeContext& ctx, size_t self) const;
-  // Whether another anchor of slot self's tag read short (Slot::last_short)
-  // with its latest range within kGeometryWindowUs of this one.
-  [[nodiscard]] bool short_anchor_heard(const RangeContext& ctx, size_t self) const;
+  // kGeometryWindowUs of this one, has `flag` equal to `value` (last_nlos
+  // false: heard in line of sight; last_short true: read short).
+  [[nodiscard]] int anchors_heard(const RangeContext& ctx, size_t self, bool Slot::*flag, bool value) const;
   float sigma_uwb_m(const RangeContext& ctx) const;
   Evidence compute_evidence(const RangeContext& ctx, const Slot& slot) const;
   float svm_p(const SvmModel* model, const Evidence& e, const RangeContext& ctx) const;
