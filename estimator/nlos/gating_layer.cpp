@@ -54,9 +54,10 @@ float los_weight_r_scale(float p_nlos) { return p_nlos < 0.99F ? 1.0F / (1.0F - 
 // With x = nu/sqrt(S) - sqrt(S)/mu the exponents collect to x^2/2, so
 //   LR = (sqrt(S)/mu) Phi(x)/phi(x) = (sqrt(S)/mu) M(-x),
 // M the Mills ratio of the normal tail, which falls as 1/|x| for a short range
-// (a range 4 sigma short scores about 0.06, as it should). For x > 0,
-// Phi(x)/phi(x) = sqrt(2 pi) e^(x^2/2) - M(x). M by Boerjesson and Sundberg
-// (1979): M(t) = 1 / ((1 - a) t + a sqrt(t^2 + b)), a = 0.339, b = 5.510,
+// (a range 4 sigma short scores about 0.06 at S = 0.02 m^2, mu = 0.5 m). For
+// x > 0, Phi(x)/phi(x) = sqrt(2 pi) e^(x^2/2) - M(x). M by Boerjesson and
+// Sundberg (IEEE Trans. Commun. COM-27(3), 1979):
+//   M(t) = 1 / ((1 - a) t + a sqrt(t^2 + b)), a = 0.339, b = 5.510,
 // relative error < 0.3 % for t >= 0; no logarithms (picolibc's logf goes
 // through double on the M4F).
 // Clipped to [0.02, 0.98]: strong channel evidence can overrule it.
@@ -67,7 +68,7 @@ float normal_mills_ratio(float t) {  // t >= 0
   return 1.0F / ((1.0F - kA) * t + kA * std::sqrt(t * t + kB));
 }
 float innovation_p_nlos(float nu_m, float s_m2, float mu_m) {
-  if (!std::isfinite(nu_m) || !(s_m2 > 0.0F) || !(mu_m > 0.0F)) return kNaNf;
+  if (!std::isfinite(nu_m) || !(s_m2 > 0.0F) || !std::isfinite(s_m2) || !(mu_m > 0.0F)) return kNaNf;
   const float sd = std::sqrt(s_m2);
   const float x = nu_m / sd - sd / mu_m;
   const float ratio = x <= 0.0F ? normal_mills_ratio(-x)
