@@ -1,6 +1,7 @@
 // Protects the closed-form NLOS models: seed 000 eq. 3-6 (consistency p2),
 // eq. 7-8 (Dempster-Shafer), seed 003 eq. 21-23 (residual factor), the
-// channel power-gap evidence and the chi-square / normal quantiles of seed 001.
+// channel power-gap evidence, the innovation evidence of the default policy
+// and the chi-square / normal quantiles of seed 001.
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -13,6 +14,7 @@
 #include "estimator/nlos/chi_square.hpp"
 #include "estimator/nlos/consistency.hpp"
 #include "estimator/nlos/dempster_shafer.hpp"
+#include "estimator/nlos/innovation_evidence.hpp"
 #include "estimator/nlos/residual_inflation.hpp"
 #include "estimator/params.hpp"
 
@@ -58,6 +60,65 @@ TEST(ResidualInflation, Eq23) {
   EXPECT_FLOAT_EQ(residual_inflation_factor(-6.0F, 3.0F, 2.0F), 4.0F);  // δ = |d - l| (eq. 21)
   EXPECT_TRUE(std::isnan(residual_inflation_factor(std::nanf(""), 3.0F, 2.0F)));
   EXPECT_TRUE(std::isnan(residual_inflation_factor(1.0F, 0.0F, 2.0F)));
+}
+
+// The exponentially modified Gaussian's likelihood ratio against N(0, S),
+// from its definition in double (docs/nlos.md "Innovation evidence"):
+// f_nlos(nu) = (1/mu) exp(S/(2 mu^2) - nu/mu) Phi(nu/sqrt(S) - sqrt(S)/mu).
+double emg_p_nlos_reference(double nu, double s, double mu) {
+  const double pi = 3.14159265358979323846;
+  const double sd = std::sqrt(s);
+  const double x = nu / sd - sd / mu;
+  const double phi_cdf = 0.5 * std::erfc(-x / std::sqrt(2.0));
+  const double f_nlos = std::exp(s / (2.0 * mu * mu) - nu / mu) * phi_cdf / mu;
+  const double f_los = std::exp(-0.5 * nu * nu / s) / std::sqrt(2.0 * pi * s);
+  const double lr = f_nlos / f_los;
+  return lr / (1.0 + lr);
+}
+
+TEST(InnovationEvidence, MillsRatioWithinThreeTenthsOfAPercentOfTheNormalTail) {
+  const double pi = 3.14159265358979323846;
+  for (int i = 0; i <= 800; ++i) {
+    const double t = 0.01 * i;
+    const double exact = 0.5 * std::erfc(t / std::sqrt(2.0)) / (std::exp(-0.5 * t * t) / std::sqrt(2.0 * pi));
+    EXPECT_NEAR(static_cast<double>(normal_mills_ratio(static_cast<float>(t))) / exact, 1.0, 0.003) << "t " << t;
+  }
+}
+
+TEST(InnovationEvidence, MatchesTheExponentiallyModifiedGaussianFromMinusEightToPlusFourSigma) {
+  // Over the range where the evidence is not clipped the float form follows
+  // the definition to 0.3 % of its value (the Mills ratio's error); a
+  // logistic stand-in for Phi was off by a factor 10 at 4 sigma short.
+  const float mus_m[] = {0.2F, 0.5F, 2.0F};
+  const float ss_m2[] = {0.0025F, 0.02F, 0.25F};
+  for (const float mu_m : mus_m) {
+    for (const float s_m2 : ss_m2) {
+      const float sd_m = std::sqrt(s_m2);
+      for (int i = -80; i <= 40; ++i) {
+        const float nu_m = 0.1F * static_cast<float>(i) * sd_m;
+        const double reference = emg_p_nlos_reference(nu_m, s_m2, mu_m);
+        const float p = innovation_p_nlos(nu_m, s_m2, mu_m);
+        const double clip = static_cast<double>(kInnovEvidenceClip);
+        const double clipped = std::fmin(std::fmax(reference, clip), 1.0 - clip);
+        EXPECT_NEAR(p, clipped, 0.003 * clipped + 1e-6) << "mu " << mu_m << " S " << s_m2 << " nu " << nu_m;
+      }
+    }
+  }
+}
+
+TEST(InnovationEvidence, ShorterRangeIsNeverMoreNlosAndNonFiniteInputGivesNaN) {
+  float previous = 1.0F;
+  for (int i = 40; i >= -80; --i) {
+    const float p = innovation_p_nlos(0.1F * static_cast<float>(i) * 0.1414F, 0.02F, 0.5F);
+    EXPECT_LE(p, previous + 1e-6F) << "innovation " << 0.1F * static_cast<float>(i) << " sigma";
+    previous = p;
+  }
+  EXPECT_LT(innovation_p_nlos(-4.0F * 0.1414F, 0.02F, 0.5F), 0.07F);
+  EXPECT_TRUE(std::isnan(innovation_p_nlos(std::numeric_limits<float>::quiet_NaN(), 0.02F, 0.5F)));
+  EXPECT_TRUE(std::isnan(innovation_p_nlos(0.1F, std::numeric_limits<float>::infinity(), 0.5F)));
+  EXPECT_TRUE(std::isnan(innovation_p_nlos(0.1F, 0.0F, 0.5F)));
+  EXPECT_TRUE(std::isnan(innovation_p_nlos(0.1F, 0.02F, 0.0F)));
+  EXPECT_FLOAT_EQ(innovation_p_nlos(1000.0F, 0.02F, 0.5F), 1.0F - kInnovEvidenceClip);
 }
 
 TEST(Channel, PowerGapEvidenceNeutralBelowLoAndFullAboveHi) {
