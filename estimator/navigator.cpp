@@ -1105,15 +1105,15 @@ void Navigator::integrity_check(uint64_t t_us, int tag_index) {
 }
 
 void Navigator::cover_gap(uint64_t t_us, Real gap_m2) {
-  gating_.on_filter_unverified();
   // The filter's claim does not cover its distance to what the ranges say:
   // enlarge the claim to cover it (the gate then lets the ranges that would
   // correct the filter back in). Repeated failures escalate through recover().
   const bool recent = last_recovery_us_ != 0 && t_us - last_recovery_us_ < cfg_.recover_memory_us;
   if (recent) {
-    recover(t_us);
+    recover(t_us);  // which marks the filter unverified too
     return;
   }
+  gating_.on_filter_unverified();
   ++diag_.inflations;
   last_recovery_us_ = t_us;
   recovery_level_ = 1;

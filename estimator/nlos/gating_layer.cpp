@@ -22,10 +22,13 @@ namespace {
 constexpr uint64_t kGeometryWindowUs = 1000000;
 constexpr int kMinLosAnchors = 2;
 constexpr float kMomentUncertainty = 4.0F;
+// Gain of the running share of agreeing ranges (decide_default): an EMA over
+// about 1 / kShareGain = 50 ranges.
+constexpr float kShareGain = 0.02F;
 // Ranges a (re)started filter must have passed inside resid_th before its
 // prediction outweighs long ranges in the escape (decide_default): as many as
-// the share of agreeing ranges averages over (1 / its gain 0.02).
-constexpr uint32_t kVerifiedRanges = 50;
+// the share of agreeing ranges averages over.
+constexpr uint32_t kVerifiedRanges = static_cast<uint32_t>(1.0F / kShareGain + 0.5F);
 
 GatingPolicy policy_from_param(float value) {
   const long v = std::lround(value);
@@ -459,12 +462,12 @@ GatingDecision GatingLayer::decide_default(const RangeContext& ctx, const Eviden
   // confirmed ranges ago: its long ranges may be its own error (ground_hard:65,
   // tuning seeds 61-99: an IMU filter handed a wrong velocity ran 10 m off
   // without the escape).
-  const bool long_explained = ctx.inertial && ctx.filter_ready && verified_ranges_ >= kVerifiedRanges &&
-                              std::isfinite(ctx.innovation_m) && ctx.innovation_m > 0.0F &&
-                              !(z < resid_th_) &&
-                              anchors_heard(ctx, static_cast<size_t>(&slot - slots_), &Slot::last_short, true) == 0;
+  // (In robust mode verified_ranges_ is 0: the relief never acts there.)
   if (escape_us_ > 0 && std::isfinite(z)) {
-    constexpr float kShareGain = 0.02F;  // EMA over about 50 ranges
+    // A finite z means a finite innovation.
+    const bool long_explained = ctx.inertial && ctx.filter_ready && verified_ranges_ >= kVerifiedRanges &&
+                                ctx.innovation_m > 0.0F && !(z < resid_th_) &&
+                                anchors_heard(ctx, static_cast<size_t>(&slot - slots_), &Slot::last_short, true) == 0;
     if (!long_explained) los_share_ += kShareGain * ((z < resid_th_ ? 1.0F : 0.0F) - los_share_);
     if (!seen_ready_) {
       seen_ready_ = true;

@@ -165,7 +165,8 @@ class GatingLayer {
   bool seen_ready_ = false;         // the filter has been ready since the last reset
   bool escape_active_ = false;      // robust mode (warm-up or escape)
   uint32_t escape_entries_ = 0;
-  float los_share_ = 0.0F;          // EMA of (|innovation| < resid_th sigma_uwb) while ready
+  float los_share_ = 0.0F;          // EMA of (|innovation| < resid_th sqrt(S)) while ready; long ranges a
+                                    // verified IMU filter explains are left out
   uint32_t verified_ranges_ = 0;    // ranges a ready filter passed inside resid_th since it (re)started,
                                     // recovered or entered robust mode
 };

@@ -343,7 +343,7 @@ TEST(GatingLayer, DefaultReadyFilterCoastsThroughLongRangesFromEveryAnchorButEsc
   // stays off (it used to fuse them and drag the filter; tuning ground_hard:15).
   GatingLayer g;
   uint64_t t = 0;
-  start_verified(g, t);
+  ASSERT_NO_FATAL_FAILURE(start_verified(g, t));
   EXPECT_EQ(feed_long_short(g, t, 60, 3.0F, -1, 0.0F, true), 0);
   EXPECT_FALSE(g.escape_active());
   EXPECT_EQ(g.escape_entries(), 0U);
@@ -352,9 +352,10 @@ TEST(GatingLayer, DefaultReadyFilterCoastsThroughLongRangesFromEveryAnchorButEsc
   // filter moved away from that anchor, the long ranges may be its drift, and
   // robust mode re-admits them as before (here through the share of agreeing
   // ranges, below drift_frac = 0.15 after about 94 ranges: the short anchor's
-  // ranges pass as line of sight, so the filter is not starved).
+  // ranges pass as line of sight, so the filter is not starved). 30 of the
+  // 120 are the short anchor's own, passed without robust mode.
   GatingLayer h;
-  start_verified(h, t);
+  ASSERT_NO_FATAL_FAILURE(start_verified(h, t));
   EXPECT_GT(feed_long_short(h, t, 120, 3.0F, 3, -0.5F, true), 30);
   EXPECT_TRUE(h.escape_active());
   EXPECT_EQ(h.escape_entries(), 1U);
@@ -362,7 +363,7 @@ TEST(GatingLayer, DefaultReadyFilterCoastsThroughLongRangesFromEveryAnchorButEsc
   // A filter that is not ready keeps the starvation test whatever the sign
   // (a pull-away under NLOS starves it with long ranges).
   GatingLayer u;
-  start_verified(u, t);
+  ASSERT_NO_FATAL_FAILURE(start_verified(u, t));
   EXPECT_GT(feed_long_short(u, t, 60, 3.0F, -1, 0.0F, false), 10);
   EXPECT_EQ(u.escape_entries(), 1U);
 
@@ -371,7 +372,7 @@ TEST(GatingLayer, DefaultReadyFilterCoastsThroughLongRangesFromEveryAnchorButEsc
   // (ground_hard:65 of tuning seeds 61-99: an IMU filter handed a wrong
   // velocity, 10 m off).
   GatingLayer v;
-  start_verified(v, t);
+  ASSERT_NO_FATAL_FAILURE(start_verified(v, t));
   v.on_filter_restart();
   feed(v, t, 20, 0.02F);
   EXPECT_GT(feed_long_short(v, t, 60, 3.0F, -1, 0.0F, true), 10);
@@ -380,12 +381,12 @@ TEST(GatingLayer, DefaultReadyFilterCoastsThroughLongRangesFromEveryAnchorButEsc
   // Nor a filter recovered in place (inflated, re-anchored) since, nor the
   // ranges-only filter, which has no inertial prediction to coast on.
   GatingLayer w;
-  start_verified(w, t);
+  ASSERT_NO_FATAL_FAILURE(start_verified(w, t));
   w.on_filter_unverified();
   EXPECT_GT(feed_long_short(w, t, 60, 3.0F, -1, 0.0F, true), 10);
   EXPECT_EQ(w.escape_entries(), 1U);
   GatingLayer c;
-  start_verified(c, t);
+  ASSERT_NO_FATAL_FAILURE(start_verified(c, t));
   EXPECT_GT(feed_long_short(c, t, 60, 3.0F, -1, 0.0F, true, false), 10);
   EXPECT_EQ(c.escape_entries(), 1U);
 }
