@@ -313,6 +313,12 @@ class Navigator {
   void enter_cv_mode(NavMode reason);
   void bridge_outage(uint64_t t_us, const Vec3& accel_mean_body_mps2, const Vec3& gyro_mean_body_radps, Real dt_s);
   void apply_constraints(uint64_t t_us);
+  // Keeps the accelerometer bias on the sphere |f_rest - b_a| = g that a rest
+  // measured (docs/ekf.md "Vertical balance after a tilt correction"): takes
+  // the reference while at rest, then adds the second-order term of the
+  // bias's move across the sphere's tangent plane.
+  void hold_rest_force_magnitude(bool at_rest);
+  void set_rest_force_reference(const Vec3& up_body);
   bool fuse(const ScalarObs& obs);
   // Ranges-only filter: predicts to t_us (later than the state), constraints,
   // heading from the velocity. False when the filter restarted on the way.
@@ -423,6 +429,13 @@ class Navigator {
   Vec3 rest_ref_gyro_body_radps_ = Vec3::Zero();  // mean gyro when rest was confirmed (body) [rad/s]
   bool imu_still_now_ = false;        // result of the latest rest check (init_on_imu, constraint rate)
   bool rest_ref_valid_ = false;       // a confirmed rest is held (rest_ref_* are its references)
+  // Reference of hold_rest_force_magnitude: the vertical in the body frame and
+  // the accelerometer bias where the filter learnt the vertical balance (the
+  // latest rest of the IMU filter, or its start from a levelling at rest).
+  Vec3 mag_up_body_ = Vec3::UnitZ();             // unit vector [-]
+  Vec3 mag_ref_bias_body_mps2_ = Vec3::Zero();   // [m/s^2]
+  Real mag_curvature_mps2_ = Real(0);            // bias moved along mag_up_body_ since [m/s^2]
+  bool mag_ref_valid_ = false;
   bool dv_rest_valid_ = false;        // dv_rest_lvl_mps_ has integrated every IMU sample since the latest rest (ground)
   Vec2 dv_rest_lvl_mps_ = Vec2::Zero();  // IMU velocity change since the latest rest, levelled frame (relative yaw) [m/s]
   Real turn_rest_rad_ = Real(0);      // rotation of the body since the latest rest (sum of |gyro - bias| dt) [rad]

@@ -91,6 +91,7 @@ void Navigator::restart(bool counted_reset) {
   levelled_ = false;
   levelled_at_rest_ = false;
   dv_rest_valid_ = false;
+  mag_ref_valid_ = false;
   q_init_ = Quat(1, 0, 0, 0);
   bg_init_.setZero();
   bg_ref_.setZero();
@@ -669,6 +670,7 @@ void Navigator::begin_imu_recovery() {
   levelled_ = false;
   levelled_at_rest_ = false;
   dv_rest_valid_ = false;
+  mag_ref_valid_ = false;
   q_init_ = Quat(1, 0, 0, 0);
   bg_init_.setZero();
   bg_ref_.setZero();
@@ -1067,6 +1069,10 @@ void Navigator::start_filter(uint64_t t_us, Real yaw_rad, Real yaw_sigma_rad) {
   sigma.segment<3>(ErrIdx::kBa).setConstant(cfg_.accel_bias_init);
   sigma.segment<3>(ErrIdx::kBg) = levelled_gyro_bias_sigma();
   ekf_.decouple_inertial(sigma);
+  // A levelling at rest balanced the vertical at the start attitude: the
+  // vertical constraints learn the bias on that tangent plane from here on.
+  mag_ref_valid_ = false;
+  if (levelled_at_rest_) set_rest_force_reference(c.row(2).transpose());
   gating_.on_filter_restart();
   phase_ = Phase::kRunning;
   cv_mode_ = false;
