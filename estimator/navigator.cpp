@@ -582,7 +582,11 @@ void Navigator::hold_rest_force_magnitude(bool at_rest) {
   const Vec3 moved = ba - mag_ref_bias_body_mps2_;
   const Real along = u.dot(moved);
   const Real d2 = std::fmax(moved.squaredNorm() - along * along, Real(0));
-  if (!(d2 < Real(0.25) * g * g)) return;  // beyond any accelerometer bias: left to the filter
+  // A move beyond 4 sigma of the bias prior on both horizontal axes is no
+  // bias's but a diverging filter's: the projection would feed it (tried with
+  // a tilt prior of sigma_b / g: tuning outage:39 rolled to 15 deg).
+  const Real d2_max = Real(32) * cfg_.accel_bias_init * cfg_.accel_bias_init;
+  if (!(d2 < d2_max) || !(d2 < Real(0.25) * g * g)) return;
   const Real curvature = d2 / (g + std::sqrt(g * g - d2));
   ba += (curvature - mag_curvature_mps2_) * u;
   mag_curvature_mps2_ = curvature;
