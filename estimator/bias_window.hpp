@@ -6,7 +6,8 @@
 // with variance equal to what the update removes from its P entry, and the
 // corrections of successive updates are uncorrelated; predictions leave the
 // nominal bias alone (random walk, Phi = I on the bias block, no other state
-// feeds it) and add q^2 dt to its variance. Over a window, per axis:
+// feeds it) and add q^2 dt to its variance; a projection of the nominal bias
+// (shifted()) is taken out of the sum. Over a window, per axis:
 //   sum of corrections        = b_end - b_start
 //   their model variance      = P_start + q^2 T - P_end   (T: predicted time)
 // so the ratio of the first squared to the second has mean 1 when the bias
@@ -33,6 +34,10 @@ class BiasWindow {
     predicted_s_ = Real(0);
   }
   void close() { predicted_s_ = Real(-1); }
+  // A move of the nominal bias that is no update's correction (the vertical
+  // balance's projection, Navigator::hold_rest_force_magnitude): kept out of
+  // the window's correction sum.
+  void shifted(Bias which, const Vec3& delta) { b0_[which] += delta; }
   bool is_open() const { return predicted_s_ >= Real(0); }
   // One prediction of dt_s with the bias random walks in effect.
   void predicted(Real dt_s) { predicted_s_ += dt_s; }

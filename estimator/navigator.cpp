@@ -548,10 +548,11 @@ void Navigator::apply_constraints(uint64_t t_us) {
 }
 
 void Navigator::set_rest_force_reference(const Vec3& up_body) {
-  mag_up_body_ = up_body;
-  mag_ref_bias_body_mps2_ = ekf_.state().ba_body_mps2;
-  mag_curvature_mps2_ = Real(0);
-  mag_ref_valid_ = true;
+  // The vertical balance was learnt here: the bias now, the body's vertical u.
+  rest_force_up_body_ = up_body;
+  rest_force_ref_bias_body_mps2_ = ekf_.state().ba_body_mps2;
+  rest_force_curvature_mps2_ = Real(0);
+  rest_force_ref_valid_ = true;
 }
 
 void Navigator::hold_rest_force_magnitude(bool at_rest) {
@@ -575,21 +576,25 @@ void Navigator::hold_rest_force_magnitude(bool at_rest) {
     set_rest_force_reference(ekf_.dcm().row(2).transpose());
     return;
   }
-  if (!mag_ref_valid_) return;
+  if (!rest_force_ref_valid_) return;
   const Real g = static_cast<Real>(site_.gravity_mps2);
-  const Vec3& u = mag_up_body_;
+  const Vec3& u = rest_force_up_body_;
   Vec3& ba = ekf_.mutable_state().ba_body_mps2;
-  const Vec3 moved = ba - mag_ref_bias_body_mps2_;
-  const Real along = u.dot(moved);
-  const Real d2 = std::fmax(moved.squaredNorm() - along * along, Real(0));
+  const Vec3 moved = ba - rest_force_ref_bias_body_mps2_;
+  const Real d2 = (moved - u.dot(moved) * u).squaredNorm();  // NaN stays NaN
   // A move beyond 4 sigma of the bias prior on both horizontal axes is no
   // bias's but a diverging filter's: the projection would feed it (tried with
-  // a tilt prior of sigma_b / g: tuning outage:39 rolled to 15 deg).
+  // a tilt prior of sigma_b / g: tuning outage:39 rolled to 15 deg). What it
+  // added goes, and so does the reference, until the next rest.
   const Real d2_max = Real(32) * cfg_.accel_bias_init * cfg_.accel_bias_init;
-  if (!(d2 < d2_max) || !(d2 < Real(0.25) * g * g)) return;
-  const Real curvature = d2 / (g + std::sqrt(g * g - d2));
-  ba += (curvature - mag_curvature_mps2_) * u;
-  mag_curvature_mps2_ = curvature;
+  const bool plausible = d2 < d2_max && d2 < Real(0.25) * g * g;  // false for NaN
+  const Real curvature = plausible ? d2 / (g + std::sqrt(g * g - d2)) : Real(0);
+  const Vec3 shift = (curvature - rest_force_curvature_mps2_) * u;
+  ba += shift;
+  // Not a correction of an update: the bias-instability window must not count it.
+  bias_win_.shifted(BiasWindow::kAccel, shift);
+  rest_force_curvature_mps2_ = curvature;
+  if (!plausible) rest_force_ref_valid_ = false;
 }
 
 bool Navigator::fuse(const ScalarObs& obs) {
@@ -659,7 +664,7 @@ void Navigator::enter_cv_mode(NavMode reason) {
   cv_mode_ = true;
   cv_reason_ = reason;
   bias_win_.close();  // the learning window closes with the IMU filter
-  mag_ref_valid_ = false;
+  rest_force_ref_valid_ = false;
   cv_yaw_known_ = true;
   ErrVec sigma = ErrVec::Zero();
   const Real yaw_sigma = std::sqrt(ekf_.cov()(ErrIdx::kAtt + 2, ErrIdx::kAtt + 2));

@@ -318,6 +318,8 @@ class Navigator {
   // the reference while at rest, then adds the second-order term of the
   // bias's move across the sphere's tangent plane.
   void hold_rest_force_magnitude(bool at_rest);
+  // Takes the reference of hold_rest_force_magnitude: the current bias and
+  // the body's vertical up_body (unit) where the filter balanced the vertical.
   void set_rest_force_reference(const Vec3& up_body);
   bool fuse(const ScalarObs& obs);
   // Ranges-only filter: predicts to t_us (later than the state), constraints,
@@ -431,11 +433,12 @@ class Navigator {
   bool rest_ref_valid_ = false;       // a confirmed rest is held (rest_ref_* are its references)
   // Reference of hold_rest_force_magnitude: the vertical in the body frame and
   // the accelerometer bias where the filter learnt the vertical balance (the
-  // latest rest of the IMU filter, or its start from a levelling at rest).
-  Vec3 mag_up_body_ = Vec3::UnitZ();             // unit vector [-]
-  Vec3 mag_ref_bias_body_mps2_ = Vec3::Zero();   // [m/s^2]
-  Real mag_curvature_mps2_ = Real(0);            // bias moved along mag_up_body_ since [m/s^2]
-  bool mag_ref_valid_ = false;
+  // latest rest of the IMU filter, or its start from a levelling at rest). It
+  // holds until the next rest, a filter (re)start or an implausible move.
+  Vec3 rest_force_up_body_ = Vec3::UnitZ();             // unit vector [-]
+  Vec3 rest_force_ref_bias_body_mps2_ = Vec3::Zero();   // [m/s^2]
+  Real rest_force_curvature_mps2_ = Real(0);            // bias moved along rest_force_up_body_ since [m/s^2]
+  bool rest_force_ref_valid_ = false;
   bool dv_rest_valid_ = false;        // dv_rest_lvl_mps_ has integrated every IMU sample since the latest rest (ground)
   Vec2 dv_rest_lvl_mps_ = Vec2::Zero();  // IMU velocity change since the latest rest, levelled frame (relative yaw) [m/s]
   Real turn_rest_rad_ = Real(0);      // rotation of the body since the latest rest (sum of |gyro - bias| dt) [rad]

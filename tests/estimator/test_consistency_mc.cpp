@@ -465,5 +465,41 @@ TEST(ConsistencyMc, BiasCorrectionSumsMatchTheirModelVarianceUnlessTheBiasWalksF
   EXPECT_GT(too_fast, 3.0);
 }
 
+TEST(ConsistencyMc, ABiasProjectionThatIsNoCorrectionStaysOutOfTheBiasInstabilityRatio) {
+  // GIVEN a window over accelerometer-bias corrections of direct measurements
+  EkfCore ekf;
+  ekf.init(NominalState{}, ErrVec::Constant(Real(0.05)));
+  BiasWindow win;
+  win.open(ekf.state(), ekf.cov());
+  for (int k = 0; k < 50; ++k) {
+    win.predicted(Real(0.1));
+    for (int i = 0; i < 3; ++i) {
+      ScalarObs obs;
+      obs.h(ErrIdx::kBa + i) = Real(1);
+      // a bias of 0.02 m/s^2 per axis (0.4 sigma of the prior), measured with noise
+      obs.innovation = Real(0.02) + Real(0.002) * static_cast<Real>((k + i) % 3 - 1) - ekf.state().ba_body_mps2(i);
+      obs.r_var = Real(1e-4);
+      ASSERT_TRUE(ekf.update(obs).applied);
+    }
+  }
+  const Real before = win.ratio(BiasWindow::kAccel, ekf.state(), ekf.cov(), Real(1e-4), Real(1e6));
+  // WHEN the nominal bias is moved by 0.05 m/s^2 along z outside any update
+  // (the vertical balance's projection) and the window is told
+  const Vec3 shift(0, 0, Real(0.05));
+  NominalState moved = ekf.state();
+  moved.ba_body_mps2 += shift;
+  BiasWindow told = win;
+  told.shifted(BiasWindow::kAccel, shift);
+  // THEN its ratio is the one without the move; a window not told reads it
+  // as a bias that walked several times farther than modelled
+  const Real after = told.ratio(BiasWindow::kAccel, moved, ekf.cov(), Real(1e-4), Real(1e6));
+  const Real untold = win.ratio(BiasWindow::kAccel, moved, ekf.cov(), Real(1e-4), Real(1e6));
+  std::printf("accel bias ratio: %.3f, after a told shift %.3f, untold %.1f\n", static_cast<double>(before),
+              static_cast<double>(after), static_cast<double>(untold));
+  EXPECT_NEAR(static_cast<double>(after), static_cast<double>(before), 1e-3 * static_cast<double>(before) + 1e-6);
+  EXPECT_GT(static_cast<double>(before), 0.05);
+  EXPECT_GT(static_cast<double>(untold), 3.0 * static_cast<double>(before));
+}
+
 }  // namespace
 }  // namespace uwbnav

@@ -285,7 +285,8 @@ TEST(NavigatorAlignment, AChordLongerThanTheVehicleCanDriveGivesNoStartHeading) 
   EXPECT_LT(s.max_h_m, 5.0);
 }
 
-// The outage spans the simulator wrote to meta.ini ("[a,b) [c,d)" in seconds).
+// The outage spans the simulator wrote to meta.ini ("[a,b) [c,d)" in seconds;
+// eval::parse_outage_list reads the same, in a library this area does not link).
 std::vector<std::pair<double, double>> sim_outages_s(const dataset::Recording& rec) {
   std::vector<std::pair<double, double>> spans;
   const auto it = rec.meta.find("sim_outages_s");
@@ -308,7 +309,8 @@ TEST(NavigatorAlignment, TheVerticalBalanceSurvivesTheTurnThatToldAConsumerAccel
   // The bias crossed the tangent plane on which the filter had learnt the
   // vertical balance: 0.04 m/s^2 of vertical acceleration under a bias sigma of
   // 1 mm/s^2 climbed at 0.14 m/s, which the vertical NHC turned into pitch and
-  // along-track drift (2.82 m after 10 s, 22 % of the outage inside 2 sigma)
+  // along-track drift (2.82 m after 10 s, 20.9 % of the outage's x and y
+  // errors inside 2 sigma)
   sim::SimOutput so;
   std::string err;
   ASSERT_EQ(sim::simulate_family("outage", 68, sim::FamilyOptions{}, so, &err), Status::kOk) << err;
