@@ -316,7 +316,8 @@ class Navigator {
   // Keeps the accelerometer bias on the sphere |f_rest - b_a| = g that a rest
   // measured (docs/ekf.md "Vertical balance after a tilt correction"): takes
   // the reference while at rest, then adds the second-order term of the
-  // bias's move across the sphere's tangent plane.
+  // bias's move across the sphere's tangent plane; a move beyond the bias
+  // prior's 4 sigma takes back what it added and drops the reference.
   void hold_rest_force_magnitude(bool at_rest);
   // Takes the reference of hold_rest_force_magnitude: the current bias and
   // the body's vertical up_body (unit) where the filter balanced the vertical.
