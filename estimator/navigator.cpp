@@ -664,7 +664,6 @@ void Navigator::enter_cv_mode(NavMode reason) {
   cv_mode_ = true;
   cv_reason_ = reason;
   bias_win_.close();  // the learning window closes with the IMU filter
-  rest_force_ref_valid_ = false;
   cv_yaw_known_ = true;
   ErrVec sigma = ErrVec::Zero();
   const Real yaw_sigma = std::sqrt(ekf_.cov()(ErrIdx::kAtt + 2, ErrIdx::kAtt + 2));

@@ -435,7 +435,7 @@ class Navigator {
   // Reference of hold_rest_force_magnitude: the vertical in the body frame and
   // the accelerometer bias where the filter learnt the vertical balance (the
   // latest rest of the IMU filter, or its start from a levelling at rest). It
-  // holds until the next rest, a filter (re)start or an implausible move.
+  // holds until the next rest, the next start_filter or an implausible move.
   Vec3 rest_force_up_body_ = Vec3::UnitZ();             // unit vector [-]
   Vec3 rest_force_ref_bias_body_mps2_ = Vec3::Zero();   // [m/s^2]
   Real rest_force_curvature_mps2_ = Real(0);            // bias moved along rest_force_up_body_ since [m/s^2]

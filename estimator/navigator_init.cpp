@@ -91,7 +91,6 @@ void Navigator::restart(bool counted_reset) {
   levelled_ = false;
   levelled_at_rest_ = false;
   dv_rest_valid_ = false;
-  rest_force_ref_valid_ = false;
   q_init_ = Quat(1, 0, 0, 0);
   bg_init_.setZero();
   bg_ref_.setZero();
@@ -670,7 +669,6 @@ void Navigator::begin_imu_recovery() {
   levelled_ = false;
   levelled_at_rest_ = false;
   dv_rest_valid_ = false;
-  rest_force_ref_valid_ = false;
   q_init_ = Quat(1, 0, 0, 0);
   bg_init_.setZero();
   bg_ref_.setZero();
@@ -1026,7 +1024,6 @@ void Navigator::start_cv_filter(uint64_t t_us, const TrackFix& fix, NavMode reas
   for (size_t i = 0; i < kMaxTags; ++i) sigma(ErrIdx::kTagBias + static_cast<int>(i)) = std::sqrt(tag_bias_prior_var());
   for (int i = 0; i < kBiasSlots; ++i) sigma(ErrIdx::kAnchorBias + i) = std::sqrt(anchor_bias_prior_var());
   ekf_.init(x, sigma);
-  rest_force_ref_valid_ = false;  // no IMU biases in this model
   for (auto& s : slots_) s = BiasSlot{};
   for (auto& a : anchor_slot_) a = -1;
   for (auto& t : tag_bias_t_us_) t = 0;
@@ -1074,7 +1071,9 @@ void Navigator::start_filter(uint64_t t_us, Real yaw_rad, Real yaw_sigma_rad) {
   // vertical constraints learn the bias on that tangent plane from here on.
   // Not after a re-alignment that carries a bias over (ba_init_): the
   // levelling read the raw specific force, so f - b_a is off the vertical
-  // and the start is no point of the sphere; the next rest sets it.
+  // and the start is no point of the sphere; the next rest sets it. This is
+  // the only way into the IMU filter, where the hold runs: a reference never
+  // outlives the filter it was taken in.
   rest_force_ref_valid_ = false;
   if (levelled_at_rest_ && ba_init_.isZero()) set_rest_force_reference(c.row(2).transpose());
   gating_.on_filter_restart();

@@ -14,10 +14,10 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "tests/estimator/nav_harness.hpp"
+#include "tools/eval/eval_outage.hpp"
 #include "tools/sim/family.hpp"
 
 namespace uwbnav {
@@ -285,22 +285,6 @@ TEST(NavigatorAlignment, AChordLongerThanTheVehicleCanDriveGivesNoStartHeading) 
   EXPECT_LT(s.max_h_m, 5.0);
 }
 
-// The outage spans the simulator wrote to meta.ini ("[a,b) [c,d)" in seconds;
-// eval::parse_outage_list reads the same, in a library this area does not link).
-std::vector<std::pair<double, double>> sim_outages_s(const dataset::Recording& rec) {
-  std::vector<std::pair<double, double>> spans;
-  const auto it = rec.meta.find("sim_outages_s");
-  if (it == rec.meta.end()) return spans;
-  const char* p = it->second.c_str();
-  double a = 0.0, b = 0.0;
-  int used = 0;
-  while (std::sscanf(p, " [%lf,%lf)%n", &a, &b, &used) == 2) {
-    spans.emplace_back(a, b);
-    p += used;
-  }
-  return spans;
-}
-
 TEST(NavigatorAlignment, TheVerticalBalanceSurvivesTheTurnThatToldAConsumerAccelerometerBiasFromTilt) {
   // GIVEN a tuning drive of the outage cell (seed 68): a consumer IMU with a
   // 1.2 m/s^2 horizontal accelerometer bias, levelled at rest (5.6 deg of roll
@@ -314,10 +298,12 @@ TEST(NavigatorAlignment, TheVerticalBalanceSurvivesTheTurnThatToldAConsumerAccel
   sim::SimOutput so;
   std::string err;
   ASSERT_EQ(sim::simulate_family("outage", 68, sim::FamilyOptions{}, so, &err), Status::kOk) << err;
-  const std::vector<std::pair<double, double>> spans = sim_outages_s(so.rec);
+  std::vector<eval::OutageSpan> spans;
+  const auto meta = so.rec.meta.find("sim_outages_s");
+  ASSERT_TRUE(meta != so.rec.meta.end() && eval::parse_outage_list(meta->second, spans));
   ASSERT_FALSE(spans.empty());
-  const double t0_s = spans.front().first;
-  const double t1_s = spans.front().second;
+  const double t0_s = spans.front().start_s;
+  const double t1_s = spans.front().end_s;
   ASSERT_NEAR(t0_s, 47.5, 0.1);
   // WHEN the navigator runs over it
   const test::RunScore run = test::replay(so.rec, Params{});
