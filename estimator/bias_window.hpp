@@ -12,9 +12,12 @@
 //   their model variance      = P_start + q^2 T - P_end   (T: predicted time)
 // so the ratio of the first squared to the second has mean 1 when the bias
 // walks as modelled, and grows when it walks faster.
+// A gyro bias that walks faster than modelled can also be explained by the
+// filter as tilt (nav-frame attitude x, y), whose corrections then add up
+// while the bias state's stay within their model: the tilt corrections over
+// the window (EkfCore's TiltTally, the same identity: each update's correction
+// has the variance it removes) are pooled with the gyro bias axes.
 #pragma once
-
-#include <cmath>
 
 #include "estimator/ekf_state.hpp"
 
@@ -48,24 +51,11 @@ class BiasWindow {
   // each axis clipped at ratio_max against single outliers; negative when no
   // axis was updated in the window (nothing to compare). x, p: now; rw: the
   // random-walk density used over the window [unit/s/sqrt(s)].
-  Real ratio(Bias which, const NominalState& x, const ErrCov& p, Real rw, Real ratio_max) const {
-    const Vec3& b = which == kGyro ? x.bg_body_radps : x.ba_body_mps2;
-    const int first = which == kGyro ? ErrIdx::kBg : ErrIdx::kBa;
-    Real sum = Real(0);
-    int axes = 0;
-    for (int i = 0; i < 3; ++i) {
-      const Real d = b(i) - b0_[which](i);
-      const Real prior = p0_[which](i) + rw * rw * predicted_s_;
-      const Real var = prior - p(first + i, first + i);
-      const Real r = d * d / var;
-      // An axis the updates hardly touched (less than 0.1 % of its variance
-      // removed) carries no evidence either way.
-      if (!(var > Real(1e-3) * prior) || !std::isfinite(r)) continue;
-      sum += std::fmin(r, ratio_max);
-      ++axes;
-    }
-    return axes > 0 ? sum / static_cast<Real>(axes) : Real(-1);
-  }
+  // For the gyro, tilt (the window's tilt corrections: the caller clears
+  // EkfCore's tally when it opens the window) adds its two axes to the mean;
+  // the accelerometer ignores it.
+  Real ratio(Bias which, const NominalState& x, const ErrCov& p, Real rw, Real ratio_max,
+             const TiltTally& tilt) const;
 
  private:
   Vec3 b0_[2];                  // bias estimates at open(): gyro [rad/s], accel [m/s^2]

@@ -206,11 +206,16 @@ void EkfCore::predict_level(Real dt_s, Real sigma_rad, Real tau_s) {
   }
   const Real q = sigma_rad * sigma_rad * (Real(1) - phi * phi);
   for (int i = 0; i < 2; ++i) {
-    for (int k = 0; k < kN; ++k) {
-      p_(A + i, k) *= phi;
-      p_(k, A + i) *= phi;
-    }
+    scale_row_col(A + i, phi);
     p_(A + i, A + i) += q;
+  }
+}
+
+void EkfCore::scale_row_col(int i, Real scale) {
+  // Row and column i of P times scale (the diagonal entry twice: scale^2).
+  for (int k = 0; k < kN; ++k) {
+    p_(i, k) *= scale;
+    p_(k, i) *= scale;
   }
 }
 
@@ -250,7 +255,12 @@ UpdateResult EkfCore::update_prepared(Real innovation, Real r_var, bool consider
         (u_.tail<ErrIdx::kRange>() * inv_s) * u_.tail<ErrIdx::kRange>().transpose();
     u_.tail<ErrIdx::kRange>().setZero();
   }
-  inject(u_ * (innovation * inv_s));
+  const Real gain = innovation * inv_s;  // K = u / S, so dx = u * innovation / S
+  inject(u_ * gain);
+  for (int i = 0; i < 2; ++i) {
+    tilt_tally_.correction_sum_rad(i) += u_(A + i) * gain;
+    tilt_tally_.removed_var_rad2(i) += u_(A + i) * u_(A + i) * inv_s;
+  }
   res.applied = true;
   return res;
 }
@@ -293,9 +303,7 @@ bool EkfCore::sanitise(bool symmetrise) {
     }
     const Real d = p_(i, i);
     if (d > ceil_var) {
-      const Real scale = std::sqrt(ceil_var / d);
-      p_.row(i) *= scale;
-      p_.col(i) *= scale;
+      scale_row_col(i, std::sqrt(ceil_var / d));
     } else if (d < floor_var) {
       p_(i, i) = floor_var;
     }

@@ -119,6 +119,11 @@ class EkfCore {
   // var (diagonal addition of the shortfall keeps P positive semi-definite).
   void inflate_to(int first, int count, Real var);
 
+  // Tilt corrections the scalar updates injected since clear_tilt_tally()
+  // (TiltTally, ekf_state.hpp; evidence of the learned bias instability).
+  const TiltTally& tilt_tally() const { return tilt_tally_; }
+  void clear_tilt_tally() { tilt_tally_ = TiltTally{}; }
+
   const NominalState& state() const { return x_; }
   NominalState& mutable_state() { return x_; }
   const ErrCov& cov() const { return p_; }
@@ -129,8 +134,11 @@ class EkfCore {
 
  private:
   void inject(const ErrVec& dx);
+  // Multiplies row and column i of P by scale (the diagonal entry by scale^2).
+  void scale_row_col(int i, Real scale);
 
   NominalState x_;
+  TiltTally tilt_tally_;  // tilt corrections since clear_tilt_tally()
   ErrCov p_;
   Mat3 c_nav_body_;
   // Scratch (a member, not a function static).

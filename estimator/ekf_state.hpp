@@ -68,6 +68,16 @@ using ErrRow = Eigen::Matrix<Real, 1, kN>;
 using ErrCov = Eigen::Matrix<Real, kN, kN>;
 using RangeErrVec = Eigen::Matrix<Real, ErrIdx::kRange, 1>;
 
+// Tilt (nav-frame attitude error x, y) corrections that scalar updates
+// injected over a span, and the variance each removed from its P entry
+// (u_i^2 / S with u = P H^T): under the model the corrections are zero-mean
+// and uncorrelated, so their sum has the summed variance (EkfCore keeps it;
+// BiasWindow reads it, docs/ekf.md "Learned bias instability").
+struct TiltTally {
+  Vec2 correction_sum_rad = Vec2::Zero();  // sum of injected tilt corrections, nav x, y [rad]
+  Vec2 removed_var_rad2 = Vec2::Zero();    // sum of the variances the updates removed [rad^2]
+};
+
 // Nominal (full) state.
 struct NominalState {
   Vec3 pos_nav_m = Vec3::Zero();      // body origin position [m]

@@ -385,33 +385,39 @@ void Navigator::learn_bias_instability(Real dt_s) {
   // (BiasWindow): the window's summed corrections against the variance the
   // model gave them, ratio 1 when the bias walks as imu.*_bias_rw says. A bias
   // that wanders faster leaves corrections that add up: the ratio exceeds 1.
-  // The windows' ratio, averaged with forgetting, moves the random-walk
-  // variance gain by its fourth root per window (damped: the gain changes the
-  // variance it is compared with), between 1 (the parameters are the floor:
-  // a data-sheet figure) and imu.bias_rw_max_gain^2.
+  // The gyro's ratio also pools the tilt corrections (a gyro walk the filter
+  // explains as tilt). The windows' ratio, averaged with forgetting, moves the
+  // random-walk variance gain per window by its square root (gyro) or fourth
+  // root (accelerometer; damped: the gain changes the variance it is compared
+  // with), between 1 (the parameters are the floor: a data-sheet figure) and
+  // imu.bias_rw_max_gain^2.
   if (!(cfg_.bias_rw_max_gain > Real(1))) return;
   const NominalState& x = ekf_.state();
   const ErrCov& p = ekf_.cov();
-  if (!bias_win_.is_open()) {
-    bias_win_.open(x, p);
-    return;
+  if (bias_win_.is_open()) {
+    bias_win_.predicted(dt_s);
+    // 5 s of IMU filter per window (tuning seeds 1-20: 10 and 20 s learn too
+    // slowly to matter within a drive; docs/ekf.md).
+    constexpr Real kWindow_s = Real(5);
+    if (bias_win_.predicted_s() < kWindow_s) return;
+    constexpr Real kForget = Real(0.7);    // weight of the previous windows' mean ratio
+    constexpr Real kRatioMax = Real(100);  // one axis' ratio in one window at most
+    const Real rw[2] = {imu_eff_.gyro_bias_rw, imu_eff_.accel_bias_rw};
+    for (int b = 0; b < 2; ++b) {
+      const Real ratio =
+          bias_win_.ratio(static_cast<BiasWindow::Bias>(b), x, p, rw[b], kRatioMax, ekf_.tilt_tally());
+      if (ratio < Real(0)) continue;  // no axis updated in the window
+      corr_ratio_[b] = kForget * corr_ratio_[b] + (Real(1) - kForget) * ratio;
+      // Square root for the gyro (pooled with the tilt; measured on tuning
+      // seeds, docs/ekf.md), fourth root for the accelerometer.
+      const Real step = std::sqrt(corr_ratio_[b]);
+      rw_var_gain_[b] *= b == BiasWindow::kGyro ? step : std::sqrt(step);
+    }
+    apply_bias_rw_gains();
   }
-  bias_win_.predicted(dt_s);
-  // 5 s of IMU filter per window (tuning seeds 1-20: 10 and 20 s learn too
-  // slowly to matter within a drive; docs/ekf.md).
-  constexpr Real kWindow_s = Real(5);
-  if (bias_win_.predicted_s() < kWindow_s) return;
-  constexpr Real kForget = Real(0.7);    // weight of the previous windows' mean ratio
-  constexpr Real kRatioMax = Real(100);  // one axis' ratio in one window at most
-  const Real rw[2] = {imu_eff_.gyro_bias_rw, imu_eff_.accel_bias_rw};
-  for (int b = 0; b < 2; ++b) {
-    const Real ratio = bias_win_.ratio(static_cast<BiasWindow::Bias>(b), x, p, rw[b], kRatioMax);
-    if (ratio < Real(0)) continue;  // no axis updated in the window
-    corr_ratio_[b] = kForget * corr_ratio_[b] + (Real(1) - kForget) * ratio;
-    rw_var_gain_[b] *= std::sqrt(std::sqrt(corr_ratio_[b]));
-  }
-  apply_bias_rw_gains();
+  // A window starts: the biases, their variances and the tilt tally from here.
   bias_win_.open(x, p);
+  ekf_.clear_tilt_tally();
 }
 
 void Navigator::track_imu_noise(const Vec3& accel_body_mps2, const Vec3& gyro_body_radps, Real dt_s) {
