@@ -401,49 +401,71 @@ TEST(ConsistencyMc, ConstraintUpdatesKeepTheCoreConsistent) {
   expect_chi2_mean(sum / kRuns, 9, kRuns, "NHC + height updates");
 }
 
-// Mean over windows of BiasWindow::ratio (the Navigator's bias-instability
-// statistic: (sum of one window's gyro-bias corrections)^2 over the variance
-// the model gave them, mean over the axes) for a gyro bias that walks with
-// density sqrt(q_true_scale) * kQModel while the filter models kQModel; the
-// bias is measured directly, with white noise.
-double bias_correction_ratio(double q_true_scale, uint64_t seed) {
-  constexpr double kQModel = 1e-5;  // [rad/s^2/sqrt(Hz)], imu.gyro_bias_rw's default
-  constexpr double kDt = 0.01;      // [s] propagation step
-  constexpr int kStepsPerMeas = 10;  // a measurement of each axis at 10 Hz
-  constexpr double kMeasSigma = 2e-4;  // [rad/s]
+// A walk measured directly, with white noise, for the bias-instability
+// statistics: the gyro bias (BiasWindow::ratio: one window's summed bias
+// corrections, squared, over the variance the model gave them) or the tilt
+// (EkfCore::tilt_tally(): one window's summed tilt corrections, squared, over
+// the variance the updates removed). Each walks with density
+// sqrt(q_true_scale) * q_model while the filter models q_model; the result is
+// the statistic's mean over the axes and windows.
+struct WalkCase {
+  int first_state;    // ErrIdx of the walking states
+  int axes;           // how many
+  double q_model;     // modelled walk density [unit/sqrt(s)]
+  double meas_sigma;  // direct measurement noise [unit]
+  bool tilt;          // read the tilt tally (else the gyro-bias window ratio)
+};
+constexpr WalkCase kGyroBiasWalk{ErrIdx::kBg, 3, 1e-5, 2e-4, false};  // imu.gyro_bias_rw's default [rad/s^2/sqrt(Hz)]
+constexpr WalkCase kTiltWalk{ErrIdx::kAtt, 2, 1e-3, 2e-3, true};      // [rad/sqrt(s)], [rad]
+
+double correction_ratio(const WalkCase& c, double q_true_scale, uint64_t seed) {
+  constexpr double kDt = 0.01;          // [s] propagation step
+  constexpr int kStepsPerMeas = 10;     // a measurement of each axis at 10 Hz
   constexpr int kStepsPerWindow = 500;  // 5 s, the Navigator's window
   constexpr int kWarmupWindows = 20;
   constexpr int kWindows = 300;
   Rng rng(seed);
   std::normal_distribution<double> n01(0.0, 1.0);
   EkfCore ekf;
-  ErrVec sigma = ErrVec::Constant(Real(1e-3));
-  ekf.init(NominalState{}, sigma);
+  ekf.init(NominalState{}, ErrVec::Constant(Real(1e-3)));
   BiasWindow win;
   double truth[3] = {0, 0, 0};
-  const double walk = kQModel * std::sqrt(q_true_scale * kDt);
+  const double walk = c.q_model * std::sqrt(q_true_scale * kDt);
   double ratio_sum = 0.0;
   int ratio_n = 0;
   for (int w = 0; w < kWarmupWindows + kWindows; ++w) {
     win.open(ekf.state(), ekf.cov());
+    ekf.clear_tilt_tally();
     for (int k = 0; k < kStepsPerWindow; ++k) {
-      for (int i = 0; i < 3; ++i) {
+      for (int i = 0; i < c.axes; ++i) {
         truth[i] += walk * n01(rng);
-        ekf.add_variance(ErrIdx::kBg + i, static_cast<Real>(kQModel * kQModel * kDt));
+        ekf.add_variance(c.first_state + i, static_cast<Real>(c.q_model * c.q_model * kDt));
       }
       win.predicted(static_cast<Real>(kDt));
       if (k % kStepsPerMeas != 0) continue;
-      for (int i = 0; i < 3; ++i) {
+      for (int i = 0; i < c.axes; ++i) {
+        // Small angles: the nav-frame tilt of the nominal attitude is 2 q_xyz / q_w.
+        const Quat& q = ekf.state().q_nav_body;
+        const double estimate = c.tilt ? 2.0 * static_cast<double>(q(1 + i)) / static_cast<double>(q(0))
+                                       : static_cast<double>(ekf.state().bg_body_radps(i));
         ScalarObs obs;
-        obs.h(ErrIdx::kBg + i) = Real(1);
-        obs.innovation = static_cast<Real>(truth[i] + kMeasSigma * n01(rng) -
-                                           static_cast<double>(ekf.state().bg_body_radps(i)));
-        obs.r_var = static_cast<Real>(kMeasSigma * kMeasSigma);
+        obs.h(c.first_state + i) = Real(1);
+        obs.innovation = static_cast<Real>(truth[i] + c.meas_sigma * n01(rng) - estimate);
+        obs.r_var = static_cast<Real>(c.meas_sigma * c.meas_sigma);
         EXPECT_TRUE(ekf.update(obs).applied);
       }
     }
-    const Real r = win.ratio(BiasWindow::kGyro, ekf.state(), ekf.cov(), static_cast<Real>(kQModel), Real(1e6), TiltTally{});
-    EXPECT_GE(r, Real(0));  // every axis was updated
+    Real r = Real(0);
+    if (c.tilt) {
+      const TiltTally& t = ekf.tilt_tally();
+      for (int i = 0; i < c.axes; ++i) {
+        EXPECT_GT(t.removed_var_rad2(i), Real(0));
+        r += t.correction_sum_rad(i) * t.correction_sum_rad(i) / t.removed_var_rad2(i) / static_cast<Real>(c.axes);
+      }
+    } else {
+      r = win.ratio(BiasWindow::kGyro, ekf.state(), ekf.cov(), static_cast<Real>(c.q_model), Real(1e6), TiltTally{});
+      EXPECT_GE(r, Real(0));  // every axis was updated
+    }
     if (w < kWarmupWindows) continue;
     ratio_sum += static_cast<double>(r);
     ++ratio_n;
@@ -456,64 +478,13 @@ TEST(ConsistencyMc, BiasCorrectionSumsMatchTheirModelVarianceUnlessTheBiasWalksF
   // WHEN its direct measurements are fused for 300 windows of 5 s
   // THEN each window's summed correction, squared, averages its model variance
   // (chi-square with 1 dof per axis and window: mean 1, sd sqrt(2/900) = 0.047)
-  const double consistent = bias_correction_ratio(1.0, 31);
+  const double consistent = correction_ratio(kGyroBiasWalk, 1.0, 31);
   // AND a bias that walks with 16 times the modelled variance (a consumer gyro
   // under the MEMS default) leaves corrections that add up far beyond it
-  const double too_fast = bias_correction_ratio(16.0, 32);
+  const double too_fast = correction_ratio(kGyroBiasWalk, 16.0, 32);
   std::printf("bias correction ratio: modelled walk %.3f, 16x walk %.3f\n", consistent, too_fast);
   EXPECT_NEAR(consistent, 1.0, 0.16);
   EXPECT_GT(too_fast, 3.0);
-}
-
-// Mean over windows of the tilt statistic (EkfCore::tilt_tally(): one window's
-// summed tilt corrections, squared, over the variance the updates removed;
-// mean over the two axes) for a tilt that walks with density
-// sqrt(q_true_scale) * kQModel while the filter models kQModel; the tilt is
-// measured directly, with white noise.
-double tilt_correction_ratio(double q_true_scale, uint64_t seed) {
-  constexpr double kQModel = 1e-3;     // [rad/sqrt(s)] attitude random walk of the model
-  constexpr double kDt = 0.01;         // [s] propagation step
-  constexpr int kStepsPerMeas = 10;    // a measurement of each axis at 10 Hz
-  constexpr double kMeasSigma = 2e-3;  // [rad]
-  constexpr int kStepsPerWindow = 500;  // 5 s, the Navigator's window
-  constexpr int kWarmupWindows = 20;
-  constexpr int kWindows = 300;
-  Rng rng(seed);
-  std::normal_distribution<double> n01(0.0, 1.0);
-  EkfCore ekf;
-  ekf.init(NominalState{}, ErrVec::Constant(Real(1e-3)));
-  double truth[2] = {0, 0};
-  const double walk = kQModel * std::sqrt(q_true_scale * kDt);
-  double ratio_sum = 0.0;
-  int ratio_n = 0;
-  for (int w = 0; w < kWarmupWindows + kWindows; ++w) {
-    ekf.clear_tilt_tally();
-    for (int k = 0; k < kStepsPerWindow; ++k) {
-      for (int i = 0; i < 2; ++i) {
-        truth[i] += walk * n01(rng);
-        ekf.add_variance(ErrIdx::kAtt + i, static_cast<Real>(kQModel * kQModel * kDt));
-      }
-      if (k % kStepsPerMeas != 0) continue;
-      for (int i = 0; i < 2; ++i) {
-        // Small angles: the nav-frame tilt of the nominal attitude is 2 q_xyz / q_w.
-        const Quat& q = ekf.state().q_nav_body;
-        ScalarObs obs;
-        obs.h(ErrIdx::kAtt + i) = Real(1);
-        obs.innovation = static_cast<Real>(truth[i] + kMeasSigma * n01(rng) -
-                                           2.0 * static_cast<double>(q(1 + i)) / static_cast<double>(q(0)));
-        obs.r_var = static_cast<Real>(kMeasSigma * kMeasSigma);
-        EXPECT_TRUE(ekf.update(obs).applied);
-      }
-    }
-    if (w < kWarmupWindows) continue;
-    const TiltTally& t = ekf.tilt_tally();
-    for (int i = 0; i < 2; ++i) {
-      EXPECT_GT(t.removed_var_rad2(i), Real(0));
-      ratio_sum += static_cast<double>(t.correction_sum_rad(i) * t.correction_sum_rad(i) / t.removed_var_rad2(i)) / 2.0;
-    }
-    ++ratio_n;
-  }
-  return ratio_sum / ratio_n;
 }
 
 TEST(ConsistencyMc, TiltCorrectionSumsMatchTheVarianceTheyRemovedUnlessTheTiltWalksFasterThanModelled) {
@@ -523,11 +494,11 @@ TEST(ConsistencyMc, TiltCorrectionSumsMatchTheVarianceTheyRemovedUnlessTheTiltWa
   // averages the variance the updates removed (chi-square with 1 dof per axis
   // and window: mean 1, sd 0.058 over 600 independent terms; seeds 41, 43, 44
   // gave 0.90, 1.17, 0.95, a wider spread: the tolerance is 0.3)
-  const double consistent = tilt_correction_ratio(1.0, 41);
+  const double consistent = correction_ratio(kTiltWalk, 1.0, 41);
   // AND a tilt that walks with 16 times the modelled variance (a gyro bias
   // walking faster than modelled, explained as tilt) leaves corrections that
   // add up far beyond it
-  const double too_fast = tilt_correction_ratio(16.0, 42);
+  const double too_fast = correction_ratio(kTiltWalk, 16.0, 42);
   std::printf("tilt correction ratio: modelled walk %.3f, 16x walk %.3f\n", consistent, too_fast);
   EXPECT_NEAR(consistent, 1.0, 0.3);
   EXPECT_GT(too_fast, 3.0);
