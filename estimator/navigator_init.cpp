@@ -51,6 +51,7 @@ constexpr Real kLevelBiasGain_radps2 = Real(0.01); // ... and its gyro-bias inte
 // bias it has not yet learnt (0.5 deg/s over 5 s, 0.04 rad).
 constexpr Real kTiltSigmaAir_rad = Real(0.1);
 constexpr Real kStartHeightSigma_m = Real(1);     // first 3-D fix: 1-sigma of the start height prior between mirror solutions [m]
+constexpr Real kExcludedRangeCost = Real(9);      // first 3-D fix: cost of each range a mode left out, against wssr (a 3-sigma residual) [-]
 constexpr Real kMaxLinearYawSigma_rad = Real(0.5); // largest yaw 1-sigma the IMU filter is started with
 constexpr Real kAccelEmaTau_s = Real(0.5);             // horizontal acceleration EMA time constant [s]
 constexpr Real kRestMaxForceChange_mps2 = Real(0.1);   // rest held: largest change of the mean specific force [m/s^2]
@@ -525,6 +526,8 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix, size_t m
   // other side (a multicopter on the floor below anchors at 1.4-2.8 m fixes as
   // well 3.5 m up), and which one Gauss-Newton finds depends on the linear start.
   bool height_switched = false;
+  Real mode_spread_h_m2 = Real(0);  // the other modes' spread about the chosen one: horizontal, vertical [m^2]
+  Real mode_spread_v_m2 = Real(0);
   if (st == Status::kOk && !opt.two_d && !have_fix_ && !started_) {
     Real z_anchors_m = Real(0);
     for (size_t i = 0; i < m; ++i) z_anchors_m += static_cast<Real>(ranges[i].anchor_pos_nav_m.z);
@@ -538,12 +541,27 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix, size_t m
       const Real dz = (static_cast<Real>(f.pos_nav_m.z) - z0_m) / kStartHeightSigma_m;
       return static_cast<Real>(f.weighted_ssr) + dz * dz;
     };
+    // The modes are compared whatever ranges each left out (robust_ls_fix):
+    // wssr falls with every range left out, so each one costs
+    // kExcludedRangeCost, a 3-sigma residual (tuning drive air_indoor:98: 4 of
+    // 6 anchors NLOS on the pad, the fix from all six 4.2 m up at cost 23.6,
+    // its mirror without one range 0.9 m down at 12.4, not compared before).
+    auto penalised = [m, &cost](const LsFix& f, bool two_d) {
+      const int excluded = static_cast<int>(m) - (two_d ? 2 : 3) - static_cast<int>(f.dof);
+      return (two_d ? static_cast<Real>(f.weighted_ssr) : cost(f)) +
+             kExcludedRangeCost * static_cast<Real>(excluded > 0 ? excluded : 0);
+    };
+    // Modes: 0 the fix, 1 its mirror, 2 the tag at z0; cost < 0: no such mode.
+    Vec3 mode_pos_m[3] = {to_vec3(ls.pos_nav_m), Vec3::Zero(), Vec3::Zero()};
+    Real mode_cost[3] = {penalised(ls, false), Real(-1), Real(-1)};
+    int chosen = 0;
     LsFix mirror;
-    // Compared only at equal redundancy: wssr falls with every range left out.
-    if (robust_ls_fix(ranges, m, mirror_opt, mirror) == Status::kOk && mirror.converged && mirror.dof == ls.dof) {
-      if (cost(mirror) < cost(ls)) {
+    if (robust_ls_fix(ranges, m, mirror_opt, mirror) == Status::kOk && mirror.converged) {
+      mode_pos_m[1] = to_vec3(mirror.pos_nav_m);
+      mode_cost[1] = penalised(mirror, false);
+      if (mode_cost[1] < mode_cost[chosen]) {
         ls = mirror;
-        height_switched = true;
+        chosen = 1;
       }
     }
     // The third mode is the prior's own: the tag at z0 (a 2-D fix). NLOS
@@ -557,12 +575,32 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix, size_t m
     floor_opt.two_d = true;
     LsFix on_floor;
     const Status floor_st = robust_ls_fix(ranges, m, floor_opt, on_floor);
-    if ((floor_st == Status::kOk || floor_st == Status::kRejected) && on_floor.converged &&
-        on_floor.dof == ls.dof + 1 && static_cast<Real>(on_floor.weighted_ssr) < cost(ls)) {
-      ls = on_floor;
-      opt.two_d = true;
-      height_switched = true;
+    if ((floor_st == Status::kOk || floor_st == Status::kRejected) && on_floor.converged) {
+      mode_pos_m[2] = to_vec3(on_floor.pos_nav_m);
+      mode_cost[2] = penalised(on_floor, true);
+      if (mode_cost[2] < mode_cost[chosen]) {
+        ls = on_floor;
+        opt.two_d = true;
+        chosen = 2;
+      }
     }
+    height_switched = chosen != 0;
+    // The modes the choice passed over keep their share of the posterior
+    // (weight exp(-cost/2) each): their spread about the chosen one joins its
+    // covariance (moment matching of the mixture about the chosen mean), so a
+    // close call starts with the uncertainty it has.
+    Real mass = Real(1);
+    for (int j = 0; j < 3; ++j) {
+      if (j == chosen || mode_cost[j] < Real(0)) continue;
+      const Vec3 d = mode_pos_m[j] - mode_pos_m[chosen];
+      if (d.squaredNorm() < Real(1e-4)) continue;  // the same solution found twice (within 1 cm) is one mode
+      const Real w = std::exp(-Real(0.5) * (mode_cost[j] - mode_cost[chosen]));
+      mass += w;
+      mode_spread_h_m2 += w * d.head<2>().squaredNorm();
+      mode_spread_v_m2 += w * d.z() * d.z();
+    }
+    mode_spread_h_m2 /= mass;
+    mode_spread_v_m2 /= mass;
     factor_ssr = static_cast<Real>(ls.weighted_ssr);
     factor_dof = static_cast<Real>(ls.dof);
     if (!opt.two_d) {
@@ -581,8 +619,9 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix, size_t m
   // ranges' sigmas explain (an NLOS range the test let through, a wrong local
   // solution) scale the fix's covariance up, never down.
   const Real var_factor = factor_dof > Real(0) ? std::fmax(Real(1), factor_ssr / factor_dof) : Real(1);
-  fix.sigma_h_m = std::sqrt(var_factor * static_cast<Real>(ls.cov_nav_m2[0][0] + ls.cov_nav_m2[1][1]));
-  fix.sigma_v_m = opt.two_d ? Real(-1) : std::sqrt(var_factor * static_cast<Real>(ls.cov_nav_m2[2][2]));
+  fix.sigma_h_m = std::sqrt(var_factor * static_cast<Real>(ls.cov_nav_m2[0][0] + ls.cov_nav_m2[1][1]) + mode_spread_h_m2);
+  fix.sigma_v_m =
+      opt.two_d ? Real(-1) : std::sqrt(var_factor * static_cast<Real>(ls.cov_nav_m2[2][2]) + mode_spread_v_m2);
   fix.yaw_rel_rad = quat_yaw(q_init_);
   fix.tag_index = tag_index;
   fix.age_s = oldest_s;
