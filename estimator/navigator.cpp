@@ -669,7 +669,6 @@ void Navigator::enter_cv_mode(NavMode reason) {
   // on in the ranges-only model; tilt is levelled, IMU biases are dropped.
   cv_mode_ = true;
   cv_reason_ = reason;
-  bias_win_.close();  // the learning window closes with the IMU filter
   cv_yaw_known_ = true;
   ErrVec sigma = ErrVec::Zero();
   const Real yaw_sigma = std::sqrt(ekf_.cov()(ErrIdx::kAtt + 2, ErrIdx::kAtt + 2));

@@ -76,7 +76,6 @@ void Navigator::restart(bool counted_reset) {
     after_failure_ = true;
   }
   phase_ = Phase::kWaitFix;
-  bias_win_.close();
 #if UWBNAV_GNSS
   gnss_prev_fused_us_ = 0;
 #endif
@@ -1098,6 +1097,9 @@ void Navigator::start_filter(uint64_t t_us, Real yaw_rad, Real yaw_sigma_rad) {
   x.q_nav_body = q;
   x.ba_body_mps2 = ba_init_;
   x.bg_body_radps = bg_init_;
+  // The bias learning opens its first window here: a window never spans a start
+  // of the IMU filter (its bias variances start again).
+  bias_win_.close();
   dv_rest_valid_ = false;  // the levelled frame is not propagated while the IMU filter runs
   ekf_.refresh_dcm();
   ErrVec sigma = ErrVec::Zero();
