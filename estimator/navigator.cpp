@@ -127,7 +127,7 @@ Status Navigator::configure(const SiteConfig& site, const Params& params) {
   }
   params_ = params;
   // A new site or IMU: the bias instability is learned again from the parameters
-  // (restart() below closes the learning window).
+  // (the IMU filter's start closes the learning window).
   for (int b = 0; b < 2; ++b) rw_var_gain_[b] = corr_ratio_[b] = Real(1);
   update_params(params);
   const Status gs = gating_.configure(site_, params_);

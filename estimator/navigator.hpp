@@ -280,7 +280,7 @@ class Navigator {
   bool force_along_levelled_vertical(uint64_t t_us) const;
   bool moved_since_rest(uint64_t t_us) const;
   Vec3 levelled_gyro_bias_sigma() const;
-  Status robust_ls_fix(LsRange* ranges, size_t n, const LsOptions& opt, LsFix& ls) const;
+  [[nodiscard]] Status robust_ls_fix(LsRange* ranges, size_t n, const LsOptions& opt, LsFix& ls) const;
   void setup_height(Real origin_z_m);
   void start_cv_filter(uint64_t t_us, const TrackFix& fix, NavMode reason);
   void align_in_background(int anchor_index, int tag_index, const UwbRange& range);
@@ -412,7 +412,7 @@ class Navigator {
   // per BiasWindow::Bias (gyro, accelerometer).
   Real rw_var_gain_[2] = {Real(1), Real(1)};  // variance gains on the bias random walks, in [1, bias_rw_max_gain^2] [-]
   Real corr_ratio_[2] = {Real(1), Real(1)};   // windows' mean (squared correction sum / model variance), forgetting [-]
-  BiasWindow bias_win_;               // the learning window (open while the IMU filter runs)
+  BiasWindow bias_win_;               // the learning window (closed by start_filter, opened by the next IMU prediction)
   Vec3 last_gyro_body_radps_ = Vec3::Zero();
 
   // Initialisation / alignment state.

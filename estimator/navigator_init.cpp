@@ -51,7 +51,8 @@ constexpr Real kLevelBiasGain_radps2 = Real(0.01); // ... and its gyro-bias inte
 // bias it has not yet learnt (0.5 deg/s over 5 s, 0.04 rad).
 constexpr Real kTiltSigmaAir_rad = Real(0.1);
 constexpr Real kStartHeightSigma_m = Real(1);     // first 3-D fix: 1-sigma of the start height prior between mirror solutions [m]
-constexpr Real kExcludedRangeCost = Real(9);      // first 3-D fix: cost of each range a mode left out, against wssr (a 3-sigma residual) [-]
+constexpr Real kExcludedRangeCost = Real(9);      // first 3-D fix: cost of each range a mode left out, against wssr (a 3-sigma residual; set a priori, not tuned) [-]
+constexpr Real kSameModeDist_m = Real(0.01);      // first 3-D fix: a mirror solve that converged within this of the fix found the fix again [m]
 constexpr Real kMaxLinearYawSigma_rad = Real(0.5); // largest yaw 1-sigma the IMU filter is started with
 constexpr Real kAccelEmaTau_s = Real(0.5);             // horizontal acceleration EMA time constant [s]
 constexpr Real kRestMaxForceChange_mps2 = Real(0.1);   // rest held: largest change of the mean specific force [m/s^2]
@@ -61,6 +62,10 @@ constexpr Real kCvStartVelSigmaV_mps = Real(0.5);  // ... vertical [m/s]
 
 // Chi-square bound of a weighted SSR with dof degrees of freedom (~99.9 % for small dof).
 Real wssr_bound(Real dof) { return Real(10) + Real(6) * dof; }
+
+// Vertical 1-sigma the start gives a 2-D fix (height assumed, not measured):
+// a ground vehicle's tag height is known to the suspension's travel [m].
+Real two_d_sigma_v_m(Platform platform) { return platform == Platform::kGround ? Real(0.2) : Real(1.0); }
 
 // Chi-square acceptance of an LS fix with dof degrees of freedom.
 bool ls_consistent(const LsFix& ls) {
@@ -540,22 +545,25 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix, size_t m
       const Real dz = (static_cast<Real>(f.pos_nav_m.z) - z0_m) / kStartHeightSigma_m;
       return static_cast<Real>(f.weighted_ssr) + dz * dz;
     };
-    // The modes are compared whatever ranges each left out (robust_ls_fix):
-    // wssr falls with every range left out, so each one costs
+    // The modes are compared whatever ranges each left out (robust_ls_fix
+    // leaves out at most one; dof counts the ranges it used minus the
+    // unknowns): wssr falls with every range left out, so each one costs
     // kExcludedRangeCost, a 3-sigma residual (tuning drive air_indoor:98: 4 of
-    // 6 anchors NLOS on the pad, the fix from all six 4.2 m up at cost 23.6,
-    // its mirror without one range 0.9 m down at 12.4, not compared before).
+    // 6 anchors NLOS on the pad, the fix from all six 4.2 m up at cost 23.6;
+    // its mirror at z -0.8 m (the truth 0.1 m), one range left out, at
+    // 12.4 + 9 was not compared before). The 2-D mode lies at z0: its cost is
+    // its wssr.
     auto penalised = [m, &cost](const LsFix& f, bool two_d) {
-      const int excluded = static_cast<int>(m) - (two_d ? 2 : 3) - static_cast<int>(f.dof);
-      return (two_d ? static_cast<Real>(f.weighted_ssr) : cost(f)) +
-             kExcludedRangeCost * static_cast<Real>(excluded > 0 ? excluded : 0);
+      const Real left_out = static_cast<Real>(m) - static_cast<Real>(f.dof) - (two_d ? Real(2) : Real(3));
+      return cost(f) + kExcludedRangeCost * left_out;
     };
     // Modes: 0 the fix, 1 its mirror, 2 the tag at z0; cost < 0: no such mode.
     Vec3 mode_pos_m[3] = {to_vec3(ls.pos_nav_m), Vec3::Zero(), Vec3::Zero()};
     Real mode_cost[3] = {penalised(ls, false), Real(-1), Real(-1)};
     int chosen = 0;
     LsFix mirror;
-    if (robust_ls_fix(ranges, m, mirror_opt, mirror) == Status::kOk && mirror.converged) {
+    if (robust_ls_fix(ranges, m, mirror_opt, mirror) == Status::kOk && mirror.converged &&
+        (to_vec3(mirror.pos_nav_m) - mode_pos_m[0]).norm() >= kSameModeDist_m) {
       mode_pos_m[1] = to_vec3(mirror.pos_nav_m);
       mode_cost[1] = penalised(mirror, false);
       if (mode_cost[1] < mode_cost[chosen]) {
@@ -584,15 +592,16 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix, size_t m
       }
     }
     height_switched = chosen != 0;
-    // The modes the choice passed over keep their share of the posterior
-    // (weight exp(-cost/2) each): their spread about the chosen one joins its
-    // covariance (moment matching of the mixture about the chosen mean), so a
-    // close call starts with the uncertainty it has.
+    // The modes the choice passed over keep their share of the posterior,
+    // weight exp(-(cost - cost_chosen)/2) each against the chosen one's 1:
+    // their spread about the chosen position joins its covariance (moment
+    // matching of the Gaussian mixture about the chosen mean, Bar-Shalom, Li &
+    // Kirubarajan 2001, 1.4.16; the modes' own covariances taken as equal), so
+    // a close call starts with the uncertainty it has.
     Real mass = Real(1);
     for (int j = 0; j < 3; ++j) {
       if (j == chosen || mode_cost[j] < Real(0)) continue;
       const Vec3 d = mode_pos_m[j] - mode_pos_m[chosen];
-      if (d.squaredNorm() < Real(1e-4)) continue;  // the same solution found twice (within 1 cm) is one mode
       const Real w = std::exp(-Real(0.5) * (mode_cost[j] - mode_cost[chosen]));
       mass += w;
       mode_spread_h_m2 += w * d.head<2>().squaredNorm();
@@ -619,8 +628,12 @@ bool Navigator::try_ls_fix(uint64_t t_us, int tag_index, TrackFix& fix, size_t m
   // solution) scale the fix's covariance up, never down.
   const Real var_factor = factor_dof > Real(0) ? std::fmax(Real(1), factor_ssr / factor_dof) : Real(1);
   fix.sigma_h_m = std::sqrt(var_factor * static_cast<Real>(ls.cov_nav_m2[0][0] + ls.cov_nav_m2[1][1]) + mode_spread_h_m2);
-  fix.sigma_v_m =
-      opt.two_d ? Real(-1) : std::sqrt(var_factor * static_cast<Real>(ls.cov_nav_m2[2][2]) + mode_spread_v_m2);
+  // A 2-D fix has no vertical sigma (the start takes the platform's), unless
+  // it won over 3-D modes, whose spread it then carries too.
+  fix.sigma_v_m = !opt.two_d ? std::sqrt(var_factor * static_cast<Real>(ls.cov_nav_m2[2][2]) + mode_spread_v_m2)
+                  : mode_spread_v_m2 > Real(0)
+                      ? std::sqrt(two_d_sigma_v_m(site_.platform) * two_d_sigma_v_m(site_.platform) + mode_spread_v_m2)
+                      : Real(-1);
   fix.yaw_rel_rad = quat_yaw(q_init_);
   fix.tag_index = tag_index;
   fix.age_s = oldest_s;
@@ -794,8 +807,7 @@ void Navigator::yaw_bank_on_range(int anchor_index, int tag_index, const UwbRang
     if (!have_fix_ || track_count_ == 0) return;
     // Seed at the newest fix (this range is part of it).
     const TrackFix& fix = track_[(track_head_ + kTrackCapacity - 1) % kTrackCapacity];
-    const bool ground = site_.platform == Platform::kGround;
-    const Real pos_v = fix.sigma_v_m > Real(0) ? fix.sigma_v_m : (ground ? Real(0.2) : Real(1.0));
+    const Real pos_v = fix.sigma_v_m > Real(0) ? fix.sigma_v_m : two_d_sigma_v_m(site_.platform);
     const Real vel_sigma = levelled_at_rest_ && !(speed_lower_bound(range.t_us) > kRestTrackSpeed_mps) ? Real(0.2) : cfg_.init_speed;
     gsf_.start(fix.tag_pos_nav_m, c_lvl * lever(fix.tag_index), Real(0),
                fix.sigma_h_m * std::sqrt(Real(0.5)) + Real(0.05), pos_v, std::fmax(vel_sigma, Real(0.2)));
@@ -1051,8 +1063,7 @@ void Navigator::start_cv_filter(uint64_t t_us, const TrackFix& fix, NavMode reas
   x.pos_nav_m = fix.tag_pos_nav_m - Vec3(0, 0, (c * lev).z());
   ErrVec sigma = ErrVec::Zero();
   const Real pos_h = std::sqrt(Real(0.5) * fix.sigma_h_m * fix.sigma_h_m + off_h.squaredNorm()) + Real(0.02);
-  const bool ground = site_.platform == Platform::kGround;
-  const Real pos_v = fix.sigma_v_m > Real(0) ? fix.sigma_v_m : (ground ? Real(0.2) : Real(1.0));
+  const Real pos_v = fix.sigma_v_m > Real(0) ? fix.sigma_v_m : two_d_sigma_v_m(site_.platform);
   sigma.segment<3>(ErrIdx::kPos) = Vec3(pos_h, pos_h, pos_v);
   sigma.segment<3>(ErrIdx::kVel) = Vec3(kCvStartVelSigma_mps, kCvStartVelSigma_mps, kCvStartVelSigmaV_mps);
   sigma.segment<3>(ErrIdx::kAtt).setConstant(Real(0.1));
@@ -1097,8 +1108,9 @@ void Navigator::start_filter(uint64_t t_us, Real yaw_rad, Real yaw_sigma_rad) {
   x.q_nav_body = q;
   x.ba_body_mps2 = ba_init_;
   x.bg_body_radps = bg_init_;
-  // The bias learning opens its first window here: a window never spans a start
-  // of the IMU filter (its bias variances start again).
+  // Any bias-learning window closes here, and the next IMU prediction opens the
+  // first one: a window never spans a start of the IMU filter (its bias
+  // variances start again).
   bias_win_.close();
   dv_rest_valid_ = false;  // the levelled frame is not propagated while the IMU filter runs
   ekf_.refresh_dcm();

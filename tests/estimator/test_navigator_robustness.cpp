@@ -279,13 +279,12 @@ TEST(NavigatorRobustness, FirstFixOfAMulticopterOnTheFloorIsBelowItsAnchorsNotOn
     std::printf("redundancy wait %s: 40 first fixes on the floor, %d on the mirror above the anchors, %d with "
                 "|z error| > 3 sigma_z, %zu switched to the mirror or the 2-D fix at the start height\n",
                 wait == 0 ? "off" : "on", c.on_mirror, c.dishonest, c.mirror_counted);
-    // THEN none starts on the mirror above the anchors
+    // THEN none starts on the mirror above the anchors. (Without NLOS the
+    // fix is already the right mode here: the switches counted before were
+    // the mirror solve converging back onto the fix, no longer counted; the
+    // test below makes the modes switch.)
     EXPECT_EQ(c.on_mirror, 0);
     EXPECT_EQ(c.dishonest, 0);
-    // AND from 4 ranges the first fix switched mode at some places (mirror or 2-D at the start height)
-    if (wait == 0) {
-      EXPECT_GT(c.mirror_counted, 0U);
-    }
   }
 }
 
@@ -300,11 +299,15 @@ TEST(NavigatorRobustness, FirstFixOnTheFloorAmongNlosLowAnchorsLeavesARangeOutRa
               "|z error| > 3 sigma_z, %zu switched mode\n",
               c.on_mirror, c.dishonest, c.mirror_counted);
   // THEN the modes that leave a range out compete too (each range left out
-  // costs a 3-sigma residual): at most an eighth start on the mirror above
-  // (39 of 40 did when only modes with the same ranges competed)
+  // costs a 3-sigma residual): most first fixes switch from the fix of all
+  // six ranges (36 of 40 measured), and at most an eighth start on the
+  // mirror above (4 measured; 39 of 40 did when only modes with the same
+  // ranges competed)
+  EXPECT_GT(c.mirror_counted, 20U);
   EXPECT_LE(c.on_mirror, 5);
   // AND the modes passed over widen the claim of a close call: at most 2 of
-  // 40 with the height error beyond 3 sigma_z (39 before)
+  // 40 with the height error beyond 3 sigma_z (1 measured; 4 with the mode
+  // choice alone, 39 before both)
   EXPECT_LE(c.dishonest, 2);
 }
 
