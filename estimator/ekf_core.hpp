@@ -64,8 +64,17 @@ class EkfCore {
   // [rad/s/sqrt(Hz)]; tilt and accelerometer bias frozen. turn_psd > 0
   // [rad/s^2/sqrt(Hz)] adds the turn rate: the IMU model with a gyro that
   // reads zero, so the body rate is -b_g and b_g,z walks with turn_psd
-  // (constant turn rate); turn_psd 0 freezes b_g as well.
-  void predict_cv(Real dt_s, Real accel_psd, Real yaw_psd, Real vel_tau_s, Real turn_psd = Real(0));
+  // (constant turn rate); turn_psd 0 freezes b_g as well. turn_rad: a
+  // measured rotation of the body about nav z over the step (a ground
+  // vehicle's gyro; its velocity turns with the body), applied half before
+  // and half after the position step (rotate_vertical).
+  void predict_cv(Real dt_s, Real accel_psd, Real yaw_psd, Real vel_tau_s, Real turn_psd = Real(0),
+                  Real turn_rad = Real(0));
+
+  // Known rotation by angle_rad about nav z of the horizontal velocity and
+  // the attitude (q <- R_z q); P <- F P F^T with F rotating the (v_x, v_y)
+  // and the nav-frame (theta_x, theta_y) error pairs.
+  void rotate_vertical(Real angle_rad);
 
   // Ground vehicle without IMU (nothing measures gravity, and ranges from
   // anchors near the tags' height cannot tell a tilt from a shift of the body

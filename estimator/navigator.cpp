@@ -670,6 +670,7 @@ void Navigator::enter_cv_mode(NavMode reason) {
   cv_mode_ = true;
   cv_reason_ = reason;
   cv_yaw_known_ = true;
+  cv_turn_rad_ = Real(0);
   ErrVec sigma = ErrVec::Zero();
   const Real yaw_sigma = std::sqrt(ekf_.cov()(ErrIdx::kAtt + 2, ErrIdx::kAtt + 2));
   sigma.segment<3>(ErrIdx::kAtt) = Vec3(Real(0.05), Real(0.05), yaw_sigma);
@@ -785,7 +786,11 @@ bool Navigator::advance_cv(uint64_t t_us) {
   if (!cv_mode_ || t_us <= t_state_us_) return true;
   const CvModel m = cv_model(t_us);
   const Real dt_cv = seconds(diff_us(t_us, t_state_us_));
-  ekf_.predict_cv(dt_cv, m.accel_psd, cfg_.cv_yaw_psd, m.vel_tau_s, m.turn_psd);
+  // A levelled IMU's turn about the vertical since the last step turns a
+  // ground vehicle's velocity and heading (none accumulates without one).
+  const Real turn_rad = imu_alive(t_us) ? cv_turn_rad_ : Real(0);
+  cv_turn_rad_ = Real(0);
+  ekf_.predict_cv(dt_cv, m.accel_psd, cfg_.cv_yaw_psd, m.vel_tau_s, m.turn_psd, turn_rad);
   if (m.level_sigma_rad > Real(0)) ekf_.predict_level(dt_cv, m.level_sigma_rad, kLevelTau_s);
   t_state_us_ = t_us;
   check_health();

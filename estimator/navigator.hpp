@@ -428,6 +428,7 @@ class Navigator {
   Vec3 bg_ref_ = Vec3::Zero();      // gyro bias whose 1-sigma is known (rest mean, failed filter's, zero) [rad/s]
   Vec3 ba_init_ = Vec3::Zero();     // accelerometer bias carried over a re-alignment [m/s^2]
   Real accel_h_ms_ = Real(0);         // EMA of the squared horizontal specific force, levelled frame [(m/s^2)^2]
+  Real cv_turn_rad_ = Real(0);        // gyro's turn about the vertical since the last ranges-only step (ground) [rad]
   Vec3 rest_ref_body_mps2_ = Vec3::Zero();  // specific force when rest was confirmed (body) [m/s^2]
   Vec3 rest_ref_gyro_body_radps_ = Vec3::Zero();  // mean gyro when rest was confirmed (body) [rad/s]
   bool imu_still_now_ = false;        // result of the latest rest check (init_on_imu, constraint rate)

@@ -170,8 +170,12 @@ void Navigator::init_on_imu(const ImuSample& imu) {
       gsf_.accumulate(quat_to_dcm(quat_mul(q_init_, quat_exp(Real(0.5) * dtheta))) * f_mean, dt);
     }
     q_init_ = quat_normalised(quat_mul(q_init_, quat_exp(dtheta)));
+    const Mat3 c_lvl = quat_to_dcm(q_init_);
+    // A ground vehicle's velocity turns with its body: the vertical component
+    // of the gyro's rotation turns the ranges-only filter's velocity (advance_cv).
+    if (site_.platform != Platform::kAir) cv_turn_rad_ += c_lvl.row(2).dot(dtheta);
     // Horizontal acceleration (levelled frame) for the ranges-only model's noise.
-    const Vec3 f_lvl = quat_to_dcm(q_init_) * to_vec3(imu.accel_body_mps2);
+    const Vec3 f_lvl = c_lvl * to_vec3(imu.accel_body_mps2);
     const Real a = std::fmin(dt / kAccelEmaTau_s, Real(1));
     accel_h_ms_ += a * (f_lvl.head<2>().squaredNorm() - accel_h_ms_);
     if (dv_rest_valid_) {
@@ -1079,6 +1083,7 @@ void Navigator::start_cv_filter(uint64_t t_us, const TrackFix& fix, NavMode reas
   gating_.on_filter_restart();
   phase_ = Phase::kRunning;
   cv_mode_ = true;
+  cv_turn_rad_ = Real(0);
   cv_reason_ = reason;
   cv_yaw_known_ = false;
   cv_rest_latched_ = false;

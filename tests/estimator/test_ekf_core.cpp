@@ -58,6 +58,43 @@ TEST(EkfCore, SparsePropagationEqualsDenseTransition) {
   EXPECT_LT(static_cast<double>((ekf.cov() - expected).cwiseAbs().maxCoeff()), kTolRel * scale * 10);
 }
 
+TEST(EkfCore, AMeasuredTurnRotatesTheRangesOnlyVelocityHeadingAndTheirCovarianceAsFPFt) {
+  // GIVEN a ranges-only state moving east at 2 m/s with a random covariance
+  EkfCore ekf;
+  NominalState x;
+  x.vel_nav_mps = Vec3(Real(2), Real(0), Real(0.1));
+  x.q_nav_body = quat_normalised(quat_mul(quat_from_yaw(Real(0.3)), Quat(Real(0.99), Real(0.05), Real(-0.03), Real(0))));
+  ekf.init(x, ErrVec::Ones());
+  ekf.mutable_cov() = random_spd(7);
+  const ErrCov p0 = ekf.cov();
+  const Real turn = Real(0.4);
+  // WHEN the gyro's turn of 0.4 rad about the vertical is applied over a zero-length step
+  ekf.predict_cv(Real(0), Real(0), Real(0), Real(0), Real(0), turn);
+  // THEN the velocity turned by 0.4 rad (speed and vertical kept), the yaw by 0.4 rad
+  // with the tilt unchanged, and P became F P F^T with F rotating the (v_x, v_y)
+  // and nav-frame (theta_x, theta_y) error pairs: the same error, seen after the turn
+  const Real c = std::cos(turn), s = std::sin(turn);
+  EXPECT_NEAR(static_cast<double>(ekf.state().vel_nav_mps.x()), static_cast<double>(2 * c), 1e-5);
+  EXPECT_NEAR(static_cast<double>(ekf.state().vel_nav_mps.y()), static_cast<double>(2 * s), 1e-5);
+  EXPECT_NEAR(static_cast<double>(ekf.state().vel_nav_mps.z()), 0.1, 1e-6);
+  EXPECT_NEAR(static_cast<double>(wrap_pi(quat_yaw(ekf.state().q_nav_body) - quat_yaw(x.q_nav_body))),
+              static_cast<double>(turn), 1e-5);
+  const Vec3 up0 = quat_to_dcm(x.q_nav_body).row(2).transpose();
+  const Vec3 up1 = ekf.dcm().row(2).transpose();
+  EXPECT_NEAR(static_cast<double>(up1.z()), static_cast<double>(up0.z()), 1e-6);
+  ErrCov f = ErrCov::Identity();
+  for (int i : {ErrIdx::kVel, ErrIdx::kAtt}) {
+    f(i, i) = c;
+    f(i, i + 1) = -s;
+    f(i + 1, i) = s;
+    f(i + 1, i + 1) = c;
+  }
+  const ErrCov expected = f * p0 * f.transpose();
+  const double scale = static_cast<double>(expected.cwiseAbs().maxCoeff());
+  EXPECT_LT(static_cast<double>((ekf.cov() - expected).cwiseAbs().maxCoeff()), kTolRel * scale * 10);
+  EXPECT_LT(static_cast<double>((ekf.cov() - ekf.cov().transpose()).cwiseAbs().maxCoeff()), kTolRel * scale);
+}
+
 TEST(EkfCore, LevelVehicleAtRestStaysPut) {
   EkfCore ekf;
   NominalState x;
