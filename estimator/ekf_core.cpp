@@ -34,7 +34,6 @@ constexpr int A = ErrIdx::kAtt;
 constexpr int BA = ErrIdx::kBa;
 constexpr int BG = ErrIdx::kBg;
 
-
 }  // namespace
 
 EkfCore::EkfCore() {

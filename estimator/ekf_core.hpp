@@ -71,11 +71,6 @@ class EkfCore {
   void predict_cv(Real dt_s, Real accel_psd, Real yaw_psd, Real vel_tau_s, Real turn_psd = Real(0),
                   Real turn_rad = Real(0));
 
-  // Known rotation by angle_rad about nav z of the horizontal velocity and
-  // the attitude (q <- R_z q); P <- F P F^T with F rotating the (v_x, v_y)
-  // and the nav-frame (theta_x, theta_y) error pairs.
-  void rotate_vertical(Real angle_rad);
-
   // Ground vehicle without IMU (nothing measures gravity, and ranges from
   // anchors near the tags' height cannot tell a tilt from a shift of the body
   // origin below the tags): roll and pitch are a first-order Gauss-Markov
@@ -145,6 +140,10 @@ class EkfCore {
   void inject(const ErrVec& dx);
   // Multiplies row and column i of P by scale (the diagonal entry by scale^2).
   void scale_row_col(int i, Real scale);
+  // Known rotation about nav z, given the sin_cos of half its angle, of the
+  // horizontal velocity and the attitude (q <- R_z q); P <- F P F^T with F
+  // rotating the (v_x, v_y) and the nav-frame (theta_x, theta_y) error pairs.
+  void rotate_vertical(const SinCos& half);
 
   NominalState x_;
   TiltTally tilt_tally_;  // tilt corrections since clear_tilt_tally()

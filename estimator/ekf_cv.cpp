@@ -14,13 +14,6 @@ constexpr int V = ErrIdx::kVel;
 constexpr int A = ErrIdx::kAtt;
 constexpr int BG = ErrIdx::kBg;
 
-// (a, b) <- R(angle) (a, b), R = [cos -sin; sin cos].
-void rotate_pair(Real& a, Real& b, const SinCos& sc) {
-  const Real a0 = a;
-  a = sc.cos * a0 - sc.sin * b;
-  b = sc.sin * a0 + sc.cos * b;
-}
-
 }  // namespace
 
 CvStep cv_step(Real dt_s, Real accel_psd, Real tau_s) {
@@ -58,7 +51,13 @@ CvStep cv_step(Real dt_s, Real accel_psd, Real tau_s) {
 }
 
 void EkfCore::predict_cv(Real dt_s, Real accel_psd, Real yaw_psd, Real vel_tau_s, Real turn_psd, Real turn_rad) {
-  if (turn_rad != Real(0)) rotate_vertical(Real(0.5) * turn_rad);
+  // Half the turn before the position step and half after (midpoint): the
+  // sin_cos of a quarter of it is the quaternion's half angle.
+  SinCos quarter{Real(0), Real(1)};
+  if (turn_rad != Real(0)) {
+    quarter = sin_cos(Real(0.25) * turn_rad);
+    rotate_vertical(quarter);
+  }
   if (turn_psd > Real(0) && dt_s > Real(0)) {
     // Turn rate: attitude and gyro bias blocks of predict_imu with a zero
     // gyro reading (w = -b_g; Phi_att,bg = -C dt), independent of (p, v).
@@ -102,7 +101,7 @@ void EkfCore::predict_cv(Real dt_s, Real accel_psd, Real yaw_psd, Real vel_tau_s
     p_(V + i, P + i) += st.q_pv;
     p_(V + i, V + i) += st.q_vv;
   }
-  if (turn_rad != Real(0)) rotate_vertical(Real(0.5) * turn_rad);
+  if (turn_rad != Real(0)) rotate_vertical(quarter);
 }
 
 void EkfCore::predict_level(Real dt_s, Real sigma_rad, Real tau_s) {
@@ -125,26 +124,25 @@ void EkfCore::predict_level(Real dt_s, Real sigma_rad, Real tau_s) {
   }
 }
 
-void EkfCore::rotate_vertical(Real angle_rad) {
-  // q <- (cos h, 0, 0, sin h) q with h = angle / 2 rotates the pairs (w, z)
-  // and (x, y) of q by h; the vectors turn by the full angle.
-  const SinCos h = sin_cos(Real(0.5) * angle_rad);
+void EkfCore::rotate_vertical(const SinCos& half) {
+  // A known rotation R about nav z moves the nav-frame errors with the
+  // vectors: R q_true = Exp(R dtheta) R q (global attitude error, Sola 2017,
+  // "Quaternion kinematics for the error-state Kalman filter", sec. 7.3), so
+  // F = R on (dv_x, dv_y) and (dtheta_x, dtheta_y), and nothing is added.
+  // q <- (cos h, 0, 0, sin h) q rotates the pairs (w, z) and (x, y) of q by
+  // the half angle h; scalar kept non-negative as quat_normalised does.
   Quat& q = x_.q_nav_body;
-  rotate_pair(q(0), q(3), h);
-  rotate_pair(q(1), q(2), h);
-  const SinCos sc{Real(2) * h.sin * h.cos, h.cos * h.cos - h.sin * h.sin};
-  rotate_pair(x_.vel_nav_mps.x(), x_.vel_nav_mps.y(), sc);
-  // Rows of both pairs for every column, then columns for every row (plain
-  // loops, not Eigen row expressions: see predict_cv).
-  for (int n = 0; n < 2 * kN; ++n) {
-    const int k = n % kN;
-    for (int i = V; i <= A; i += A - V) {
-      if (n < kN) {
-        rotate_pair(p_(i, k), p_(i + 1, k), sc);
-      } else {
-        rotate_pair(p_(k, i), p_(k, i + 1), sc);
-      }
-    }
+  rotate_xy(q(0), q(3), half);
+  rotate_xy(q(1), q(2), half);
+  if (q(0) < Real(0)) q = -q;
+  const SinCos sc{Real(2) * half.sin * half.cos, half.cos * half.cos - half.sin * half.sin};
+  rotate_xy(x_.vel_nav_mps.x(), x_.vel_nav_mps.y(), sc);
+  // Rows of both pairs, then columns (plain loops: see predict_cv).
+  for (int i = V; i <= A; i += A - V) {
+    for (int k = 0; k < kN; ++k) rotate_xy(p_(i, k), p_(i + 1, k), sc);
+  }
+  for (int i = V; i <= A; i += A - V) {
+    for (int k = 0; k < kN; ++k) rotate_xy(p_(k, i), p_(k, i + 1), sc);
   }
   refresh_dcm();
 }

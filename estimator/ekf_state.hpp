@@ -148,6 +148,13 @@ inline Real quat_yaw(const Quat& q) {
   return std::atan2(Real(2) * (q(1) * q(2) + q(0) * q(3)), q(0) * q(0) + q(1) * q(1) - q(2) * q(2) - q(3) * q(3));
 }
 
+// (x, y) <- R(angle) (x, y), R = [cos -sin; sin cos], from the angle's sin_cos.
+inline void rotate_xy(Real& x, Real& y, const SinCos& sc) {
+  const Real x0 = x;
+  x = sc.cos * x0 - sc.sin * y;
+  y = sc.sin * x0 + sc.cos * y;
+}
+
 // Quaternion of a pure rotation about nav z by yaw_rad.
 inline Quat quat_from_yaw(Real yaw_rad) {
   const SinCos sc = sin_cos(Real(0.5) * yaw_rad);

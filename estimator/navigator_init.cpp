@@ -92,6 +92,7 @@ void Navigator::restart(bool counted_reset) {
 #endif
   cv_mode_ = false;
   cv_yaw_known_ = false;
+  cv_turn_rad_ = Real(0);
   height_on_ = false;
   levelled_ = false;
   levelled_at_rest_ = false;

@@ -26,10 +26,9 @@ constexpr Real kMinWeightSpeed_mps = Real(0.3);
 Vec3 dyaw(const Vec3& rotated) { return Vec3(-rotated.y(), rotated.x(), Real(0)); }
 
 Vec3 rot_z(Real psi, const Vec3& x) {
-  const SinCos sc = sin_cos(psi);
-  const Real c = sc.cos;
-  const Real s = sc.sin;
-  return Vec3(c * x.x() - s * x.y(), s * x.x() + c * x.y(), x.z());
+  Vec3 r = x;
+  rotate_xy(r.x(), r.y(), sin_cos(psi));
+  return r;
 }
 
 }  // namespace
