@@ -50,6 +50,8 @@ Status FlashUwbSource::poll(uint64_t up_to_us, UwbRange& out) {
   return Status::kOk;
 }
 
+RingCanBus::RingCanBus() = default;
+
 Status RingCanBus::send(const hal::CanFrame& frame) {
   const bool fd = (frame.flags & hal::CanFrame::kFlagFd) != 0;
   if (frame.len > (fd ? 64U : 8U)) return Status::kInvalidArgument;
