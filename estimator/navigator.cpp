@@ -837,7 +837,7 @@ RangeReport Navigator::on_range(const UwbRange& range) {
     TrackFix fix;
     if (init_track(ai, ti, range)) {
       fix = last_fix_per_tag_[ti];
-      start_cv_filter(range.t_us, fix, site_.has_imu ? NavMode::kAligning : NavMode::kUwbOnly);
+      start_cv_filter(range.t_us, fix, site_.has_imu ? NavMode::kAligning : NavMode::kUwbOnly, Vec2::Zero());
     }
     ++diag_.ranges_rejected;
     ++cycle_rejected_;
@@ -1290,16 +1290,16 @@ void Navigator::recover(uint64_t t_us, uint8_t min_level) {
   // not trusted any more: the ranges-only filter, re-anchored to the fix,
   // publishes (recovering) while levelling and heading are acquired again;
   // attitude and gyro bias seed the relative attitude. A diverged ranges-only
-  // filter simply starts again from the fix. The IMU filter's horizontal
-  // velocity is the ranges-only filter's prior mean (its sigma stays the
-  // start's kCvStartVelSigma_mps): the ranges observe the nav-frame velocity
-  // whatever the heading, and a zero mean at 2 m/s claimed a car turning at
-  // 5 m/s to 2.5 sigma (docs/ekf.md "Ladder").
+  // filter simply starts again from the fix, from zero velocity (its velocity
+  // is what diverged). The IMU filter's horizontal velocity is the restarted
+  // filter's prior mean (at the start's sigma): the ranges observe the
+  // nav-frame velocity whatever the heading, and a zero mean claimed a car
+  // driving at 5.6 m/s to 2.8 sigma (docs/ekf.md "Ladder").
   ++diag_.reinits;
   const NavMode reason = cv_mode_ ? cv_reason_ : NavMode::kRecovering;
-  const bool from_imu_filter = !cv_mode_;
-  const Vec3 vel_nav_mps = ekf_.state().vel_nav_mps;
-  if (from_imu_filter) {
+  Vec2 vel_prior_mps = Vec2::Zero();
+  if (!cv_mode_) {
+    if (ekf_.state().vel_nav_mps.allFinite()) vel_prior_mps = ekf_.state().vel_nav_mps.head<2>();
     q_init_ = ekf_.state().q_nav_body;
     bg_init_ = ekf_.state().bg_body_radps;
     bg_ref_ = bg_init_;
@@ -1318,8 +1318,7 @@ void Navigator::recover(uint64_t t_us, uint8_t min_level) {
   // depend on the filter, and it is the evidence of motion the rest check needs.
   heading_avg_ = HeadingAverage{};
   gsf_.reset();
-  start_cv_filter(t_us, fix, reason);
-  if (from_imu_filter) ekf_.mutable_state().vel_nav_mps.head<2>() = vel_nav_mps.head<2>();
+  start_cv_filter(t_us, fix, reason, vel_prior_mps);
   recovery_level_ = 3;
   last_recovery_us_ = t_us;
 }

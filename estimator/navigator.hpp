@@ -282,7 +282,8 @@ class Navigator {
   Vec3 levelled_gyro_bias_sigma() const;
   [[nodiscard]] Status robust_ls_fix(LsRange* ranges, size_t n, const LsOptions& opt, LsFix& ls) const;
   void setup_height(Real origin_z_m);
-  void start_cv_filter(uint64_t t_us, const TrackFix& fix, NavMode reason);
+  // vel_h_prior_mps: horizontal velocity prior mean, nav frame [m/s] (zero at a start).
+  void start_cv_filter(uint64_t t_us, const TrackFix& fix, NavMode reason, const Vec2& vel_h_prior_mps);
   void align_in_background(int anchor_index, int tag_index, const UwbRange& range);
   void cv_set_yaw(Real yaw_rad, Real yaw_sigma_rad);
   void cv_forget_yaw();

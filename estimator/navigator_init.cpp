@@ -1054,11 +1054,16 @@ void Navigator::cv_forget_yaw() {
   heading_avg_ = HeadingAverage{};
 }
 
-void Navigator::start_cv_filter(uint64_t t_us, const TrackFix& fix, NavMode reason) {
+void Navigator::start_cv_filter(uint64_t t_us, const TrackFix& fix, NavMode reason, const Vec2& vel_h_prior_mps) {
   // Ranges-only filter from the first fix: the state's horizontal position is
   // the tags' centroid while the heading is unknown (cv_yaw_known_ false), so
-  // an unknown heading never turns a lever arm the wrong way.
+  // an unknown heading never turns a lever arm the wrong way. The horizontal
+  // velocity starts at the prior mean (a re-alignment's IMU filter velocity;
+  // the centroid's differs from the body origin's by w x l, well inside the
+  // 1-sigma of kCvStartVelSigma_mps), the vertical at zero as the height
+  // model's prior.
   NominalState x;
+  x.vel_nav_mps.head<2>() = vel_h_prior_mps;
   x.q_nav_body = levelled_ ? q_init_ : Quat(1, 0, 0, 0);
   const Mat3 c = quat_to_dcm(x.q_nav_body);
   const Vec3 lev = lever(fix.tag_index);

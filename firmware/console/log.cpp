@@ -29,8 +29,6 @@ size_t append(char* buf, size_t cap, size_t n, const char* fmt, ...) {
 
 }  // namespace
 
-Logger::Logger() = default;
-
 Logger& logger() { return g_logger; }
 
 bool parse_log_level(const char* text, LogLevel* out) {

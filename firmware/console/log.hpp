@@ -53,10 +53,6 @@ class Logger {
  public:
   static constexpr size_t kLineMax = 192;  // formatted line incl. prefix [bytes]
 
-  // Out of line (log.cpp): the global logger is then zero-initialised (.bss)
-  // and constructed at start-up, not a 232 B initial image in flash (.data).
-  Logger();
-
   void set_sink(LogSink* sink) { sink_ = sink; }
   LogSink* sink() const { return sink_; }
   void set_level(LogLevel level) { level_ = level; }

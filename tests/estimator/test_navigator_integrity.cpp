@@ -168,7 +168,8 @@ TEST(NavigatorIntegrity, AReAlignedFilterStartsFromTheVehiclesVelocityAndStaysNe
   // car drives (74 s, 5.6 m/s) and again in a U-turn. History: each time the
   // ranges-only filter restarted from zero velocity at a claimed 2 m/s; in
   // the U-turn NLOS ranges bent that velocity the wrong way while the gyro's
-  // turn rotated it, 5.2 m off and 5 re-alignments in all (RMSE 0.469 m)
+  // turn rotated it, and the published position (every epoch, degraded ones
+  // included) ran 5.9 m off, with 5 re-alignments in all
   sim::SimOutput so;
   std::string err;
   ASSERT_EQ(sim::simulate_family("ground_hard", 61, sim::FamilyOptions{}, so, &err), Status::kOk) << err;
@@ -176,35 +177,38 @@ TEST(NavigatorIntegrity, AReAlignedFilterStartsFromTheVehiclesVelocityAndStaysNe
   const test::RunScore s = test::replay(so.rec, Params{});
   uint64_t realign_us = 0;
   float speed_mps = 0.0F;
+  double max_all_m = 0.0;  // over every published epoch with truth, whatever its status
   for (const test::ScoredOutput& o : s.outputs) {
-    if (o.out.mode == NavMode::kRecovering) {
+    if (realign_us == 0 && o.out.mode == NavMode::kRecovering) {
       realign_us = o.out.t_us;
       speed_mps = std::hypot(o.out.vel_nav_mps.x, o.out.vel_nav_mps.y);
-      break;
+    }
+    if (o.has_truth && o.out.mode != NavMode::kNone) {
+      max_all_m = std::max(max_all_m, std::hypot(o.err_nav_m[0], o.err_nav_m[1]));
     }
   }
-  std::printf("ground_hard:61: re-aligns %u, first at %.2f s publishing %.2f m/s; rmse_h %.3f m, max %.2f m\n",
-              s.diag.reinits, static_cast<double>(realign_us) * 1e-6, static_cast<double>(speed_mps), s.rmse_h_m,
-              s.max_h_m);
+  std::printf("ground_hard:61: re-aligns %u, first at %.2f s publishing %.2f m/s; max error of all epochs %.2f m\n",
+              s.diag.reinits, static_cast<double>(realign_us) * 1e-6, static_cast<double>(speed_mps), max_all_m);
   // THEN the ranges-only filter starts from the IMU filter's velocity (the car
-  // does not stop when its filter re-aligns) and the output stays within 2 m
-  // of the track
+  // does not stop when its filter re-aligns), the output stays within 2 m of
+  // the track through the re-alignments, and they do not repeat
   ASSERT_GE(s.diag.reinits, 1U);
   EXPECT_TRUE(s.all_finite);
-  EXPECT_GT(speed_mps, 1.0F);
-  EXPECT_LT(s.max_h_m, 2.0);
-  EXPECT_LT(s.rmse_h_m, 0.35);
+  EXPECT_GT(speed_mps, 4.0F);
+  EXPECT_LT(max_all_m, 2.0);
+  EXPECT_LE(s.diag.reinits, 3U);
 }
 
 TEST(NavigatorAir, AMulticoptersRangesOnlyVelocityDoesNotTurnWithItsYaw) {
-  // GIVEN a tuning drive of the air_indoor cell (seed 1: its rotors vibrate
-  // above the rest detector's bar, so no rest is ever confirmed, and its yaw
-  // bank never settles: the ranges-only filter publishes all the way), its
-  // ranges thinned to one every 0.5 s so that the filter coasts between them,
+  // GIVEN a tuning drive of the air_indoor cell (seed 1), the yaw bank's
+  // hand-over at 0.01 rad (ekf.init_yaw_sigma: the ranges-only filter
+  // publishes all the way), its ranges thinned to one every 0.5 s so that
+  // the filter coasts between them,
   // flown twice: as simulated, and with the gyro reading an extra 0.3 rad/s
   // about body z for 10 s in flight (60-70 s), a yaw the body does not make.
   // A ground vehicle's ranges-only velocity turns with the gyro's vertical
-  // rotation; a multicopter's does not follow its yaw (docs/ekf.md)
+  // rotation; a multicopter's does not follow its yaw (docs/ekf.md
+  // "Initialisation", the ranges-only filter)
   sim::SimOutput so;
   std::string err;
   ASSERT_EQ(sim::simulate_family("air_indoor", 1, sim::FamilyOptions{}, so, &err), Status::kOk) << err;
@@ -222,8 +226,10 @@ TEST(NavigatorAir, AMulticoptersRangesOnlyVelocityDoesNotTurnWithItsYaw) {
     if (imu.t_us >= 60000000 && imu.t_us < 70000000) imu.gyro_body_radps.z += 0.3F;
   }
   // WHEN the navigator runs over both
-  const test::RunScore plain = test::replay(so.rec, Params{});
-  const test::RunScore turned = test::replay(yawed, Params{});
+  Params params;
+  ASSERT_EQ(params.set(ParamId::kEkfInitYawSigma, 0.01F), Status::kOk);
+  const test::RunScore plain = test::replay(so.rec, params);
+  const test::RunScore turned = test::replay(yawed, params);
   ASSERT_EQ(plain.outputs.size(), turned.outputs.size());
   double max_diff_m = 0.0;
   size_t ranges_only = 0;
