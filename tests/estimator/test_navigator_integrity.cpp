@@ -37,6 +37,18 @@ double max_error(const test::RunScore& s, uint64_t t0_us, uint64_t t1_us) {
   return m;
 }
 
+// Keeps only ranges at least min_gap_us after the previous kept one (sparse ranging).
+void thin_ranges(dataset::Recording& rec, uint64_t min_gap_us) {
+  std::vector<dataset::UwbRow> thinned;
+  uint64_t last_us = 0;
+  for (const dataset::UwbRow& r : rec.uwb) {
+    if (last_us != 0 && r.range.t_us - last_us < min_gap_us) continue;
+    thinned.push_back(r);
+    last_us = r.range.t_us;
+  }
+  rec.uwb = thinned;
+}
+
 // The push of the recovery tests: the accelerometer reads 3 m/s^2 too much
 // along body x for 2 s from t = 40 s.
 constexpr uint64_t kPushFrom_us = 40000000;
@@ -105,14 +117,7 @@ TEST(NavigatorIntegrity, WithSparseRangingTheShortRangeTestBringsAPushedFilterBa
   sim::SimOutput so;
   std::string err;
   ASSERT_EQ(sim::simulate_family("ground_los", 3, sim::FamilyOptions{}, so, &err), Status::kOk) << err;
-  std::vector<dataset::UwbRow> thinned;
-  uint64_t last_us = 0;
-  for (const dataset::UwbRow& r : so.rec.uwb) {
-    if (last_us != 0 && r.range.t_us - last_us < 450000) continue;
-    thinned.push_back(r);
-    last_us = r.range.t_us;
-  }
-  so.rec.uwb = thinned;
+  thin_ranges(so.rec, 450000);
   push_accelerometer(so.rec);
   // WHEN the navigator runs over it
   const test::RunScore s = test::replay(so.rec, Params{});
@@ -213,14 +218,7 @@ TEST(NavigatorAir, AMulticoptersRangesOnlyVelocityDoesNotTurnWithItsYaw) {
   std::string err;
   ASSERT_EQ(sim::simulate_family("air_indoor", 1, sim::FamilyOptions{}, so, &err), Status::kOk) << err;
   ASSERT_EQ(so.rec.site.platform, Platform::kAir);
-  std::vector<dataset::UwbRow> thinned;
-  uint64_t last_us = 0;
-  for (const dataset::UwbRow& r : so.rec.uwb) {
-    if (last_us != 0 && r.range.t_us - last_us < 500000) continue;
-    thinned.push_back(r);
-    last_us = r.range.t_us;
-  }
-  so.rec.uwb = thinned;
+  thin_ranges(so.rec, 500000);
   dataset::Recording yawed = so.rec;
   for (ImuSample& imu : yawed.imu) {
     if (imu.t_us >= 60000000 && imu.t_us < 70000000) imu.gyro_body_radps.z += 0.3F;
