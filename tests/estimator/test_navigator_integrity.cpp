@@ -243,12 +243,14 @@ TEST(NavigatorAir, AMulticoptersRangesOnlyVelocityDoesNotTurnWithItsYaw) {
   std::printf("air_indoor:1, 2 ranges/s, with 3 rad of false yaw: %zu of %zu epochs ranges-only in both runs, "
               "largest horizontal difference %.4f m\n",
               ranges_only, plain.outputs.size(), max_diff_m);
-  // THEN the published ranges-only solution stays within centimetres of the
-  // plain run's (measured 0.03 m: the levelled attitude has other uses, such
-  // as the lever arm's vertical part); turned with the gyro, the velocity
-  // took the false 3 rad and the output ran 4.7 m off
+  // THEN the published ranges-only solution stays within 1 m of the plain
+  // run's; turned with the gyro, the velocity took the false 3 rad and the
+  // output ran 4.7 m off. (Measured without the turn: 0.03 m on x86-64,
+  // 0.27 m on aarch64, whose fused multiply-adds send the sparse run down
+  // another path: the false yaw also reaches the levelled attitude's other
+  // uses, such as the rest windows at its steps and the lever arm.)
   EXPECT_GT(ranges_only, plain.outputs.size() * 9 / 10);
-  EXPECT_LT(max_diff_m, 0.1);
+  EXPECT_LT(max_diff_m, 1.0);
   EXPECT_TRUE(turned.all_finite);
 }
 
